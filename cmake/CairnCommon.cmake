@@ -30,6 +30,12 @@ function(cairn_target_warnings target)
   endif()
 endfunction()
 
+# All executables (cairn, cairn-<verb> tools, tests) of one build tree land in <build>/bin, so that the
+# `cairn` front end finds its `cairn-<verb>` tools next to itself.
+if(NOT CMAKE_RUNTIME_OUTPUT_DIRECTORY)
+  set(CMAKE_RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/bin)
+endif()
+
 # Root of the source tree (for data files in tests: ../shared lives next to it).
 get_filename_component(CAIRN_SOURCE_ROOT "${CMAKE_CURRENT_LIST_DIR}/.." ABSOLUTE)
 
