@@ -1,0 +1,36 @@
+// Jump-distance segmentation of a scan into clusters with a range-adaptive threshold.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <vector>
+
+#include "cairn/people_tracking/scan.hpp"
+
+namespace cairn::people_tracking {
+
+struct SegmentationParams {
+  // Two consecutive valid returns belong to one cluster when their distance is below
+  //   jump_base + jump_beam_factor * min(r_i, r_j) * |angle_increment|
+  // i.e. a fixed part plus a multiple of the lateral beam spacing at that range (range-adaptive, as in
+  // Arras et al. 2007 / Dietmayer et al. 2001).
+  double jump_base = 0.10;        // m
+  double jump_beam_factor = 3.0;  // multiples of the beam spacing r * dtheta
+  int max_gap_beams = 1;          // invalid beams tolerated inside a cluster (dropouts)
+  std::size_t min_points = 3;     // smaller clusters are dropped
+  std::size_t max_points = 400;   // larger clusters are dropped (long walls)
+  double jump_cap = 5.0;          // m, neighbour jump distance when there is no neighbour
+};
+
+struct Cluster {
+  std::vector<std::size_t> beams;      // beam indices (scan order)
+  std::vector<Eigen::Vector2d> points;  // sensor frame
+  double jump_prev = 0.0;              // distance from first point to the preceding valid return (capped)
+  double jump_next = 0.0;              // distance from last point to the following valid return (capped)
+  [[nodiscard]] Eigen::Vector2d centroid() const;
+};
+
+// Throws InputError on malformed scan metadata (validateScan). NaN/inf beams split clusters.
+std::vector<Cluster> segmentScan(const LaserScan& scan, const SegmentationParams& params = {});
+
+}  // namespace cairn::people_tracking
