@@ -1,0 +1,141 @@
+// Occupancy images (ROS map_server convention) -> wall segments.
+#include <png.h>
+
+#include <cctype>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "cairn/sim/world.hpp"
+
+namespace cairn::sim {
+namespace {
+
+OccupancyImage readPgm(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "cannot open image");
+  std::string magic;
+  in >> magic;
+  auto token = [&]() -> long {
+    // skips whitespace and # comments
+    for (;;) {
+      int c = in.peek();
+      if (c == '#') {
+        std::string dummy;
+        std::getline(in, dummy);
+      } else if (std::isspace(c)) {
+        in.get();
+      } else {
+        break;
+      }
+    }
+    long v = -1;
+    if (!(in >> v)) throw InputError(path, 0, "truncated PGM header");
+    return v;
+  };
+  if (magic != "P5" && magic != "P2") throw InputError(path, 0, "not a PGM (P2/P5) image");
+  OccupancyImage img;
+  img.width = static_cast<int>(token());
+  img.height = static_cast<int>(token());
+  const long maxval = token();
+  if (img.width <= 0 || img.height <= 0 || img.width > 100000 || img.height > 100000)
+    throw InputError(path, 0, "bad PGM size");
+  if (maxval <= 0 || maxval > 65535) throw InputError(path, 0, "bad PGM maxval");
+  const std::size_t n = static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.height);
+  img.pixels.resize(n);
+  if (magic == "P5") {
+    in.get();  // single whitespace after maxval
+    const int bytes = maxval > 255 ? 2 : 1;
+    std::vector<unsigned char> raw(n * static_cast<std::size_t>(bytes));
+    if (!in.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(raw.size())))
+      throw InputError(path, 0, "truncated PGM data");
+    for (std::size_t i = 0; i < n; ++i) {
+      const long v = bytes == 2 ? (raw[2 * i] << 8) | raw[2 * i + 1] : raw[i];
+      img.pixels[i] = static_cast<std::uint8_t>(v * 255 / maxval);
+    }
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      long v = -1;
+      if (!(in >> v) || v < 0 || v > maxval) throw InputError(path, 0, "bad PGM pixel value");
+      img.pixels[i] = static_cast<std::uint8_t>(v * 255 / maxval);
+    }
+  }
+  return img;
+}
+
+OccupancyImage readPng(const std::string& path) {
+  png_image image;
+  std::memset(&image, 0, sizeof image);
+  image.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&image, path.c_str()))
+    throw InputError(path, 0, std::string("cannot read PNG: ") + image.message);
+  image.format = PNG_FORMAT_GRAY;
+  OccupancyImage img;
+  img.width = static_cast<int>(image.width);
+  img.height = static_cast<int>(image.height);
+  img.pixels.resize(PNG_IMAGE_SIZE(image));
+  if (!png_image_finish_read(&image, nullptr, img.pixels.data(), 0, nullptr)) {
+    const std::string msg = image.message;
+    png_image_free(&image);
+    throw InputError(path, 0, "cannot decode PNG: " + msg);
+  }
+  return img;
+}
+
+}  // namespace
+
+OccupancyImage readImage(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "cannot open image");
+  unsigned char sig[8] = {};
+  in.read(reinterpret_cast<char*>(sig), 8);
+  if (in.gcount() == 8 && png_sig_cmp(sig, 0, 8) == 0) return readPng(path);
+  return readPgm(path);
+}
+
+std::vector<Segment> occupancyToSegments(const OccupancyImage& img, double resolution, Pose2 origin,
+                                         double occupied_thresh, bool negate, float reflectivity) {
+  const int w = img.width, h = img.height;
+  // occ(cx, cy) with cy counted upwards from the bottom row (map frame), outside = free
+  std::vector<std::uint8_t> occ(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
+  for (int r = 0; r < h; ++r)
+    for (int c = 0; c < w; ++c) {
+      const double v = img.pixels[static_cast<std::size_t>(r) * w + c];
+      const double p = negate ? v / 255.0 : (255.0 - v) / 255.0;
+      occ[static_cast<std::size_t>(h - 1 - r) * w + c] = p > occupied_thresh ? 1 : 0;
+    }
+  auto at = [&](int cx, int cy) -> int {
+    if (cx < 0 || cy < 0 || cx >= w || cy >= h) return 0;
+    return occ[static_cast<std::size_t>(cy) * w + cx];
+  };
+  auto corner = [&](double gx, double gy) { return transformPoint(origin, {gx * resolution, gy * resolution}); };
+  std::vector<Segment> out;
+  // horizontal grid lines y = gy: edge between cell rows gy-1 and gy where occupancy differs
+  for (int gy = 0; gy <= h; ++gy) {
+    int run_start = -1, run_kind = 0;
+    for (int cx = 0; cx <= w; ++cx) {
+      const int below = at(cx, gy - 1), above = at(cx, gy);
+      const int kind = cx < w && below != above ? (below ? 1 : 2) : 0;  // orientation kept apart
+      if (kind != run_kind) {
+        if (run_kind) out.push_back({corner(run_start, gy), corner(cx, gy), reflectivity});
+        run_start = cx;
+        run_kind = kind;
+      }
+    }
+  }
+  for (int gx = 0; gx <= w; ++gx) {
+    int run_start = -1, run_kind = 0;
+    for (int cy = 0; cy <= h; ++cy) {
+      const int left = at(gx - 1, cy), right = at(gx, cy);
+      const int kind = cy < h && left != right ? (left ? 1 : 2) : 0;
+      if (kind != run_kind) {
+        if (run_kind) out.push_back({corner(gx, run_start), corner(gx, cy), reflectivity});
+        run_start = cy;
+        run_kind = kind;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace cairn::sim

@@ -1,0 +1,238 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "cairn/sim/world.hpp"
+
+using namespace cairn::sim;
+
+namespace {
+
+const char* kWorld = R"(name: test
+walls:
+  - [[0, 0], [10, 0], [10, 5], [0, 5], [0, 0]]
+segments:
+  - [5, 0, 5, 2]
+  - [5, 3, 5, 5, 0.9]
+regions:
+  - {name: left, rect: [0, 0, 5, 5]}
+  - name: right
+    polygon: [[5, 0], [10, 0], [10, 5], [5, 5]]
+doors:
+  - name: d1
+    hinge: [5, 2]
+    latch: [5, 3]
+    schedule: [{t: 0, open: false}, {t: 10, open: true}, {t: 20, open: false}]
+    period: 30
+  - {name: d2, hinge: [1, 1], latch: [2, 1], open: true}
+furniture:
+  - name: table
+    size: [1.6, 0.8]
+    legs_only: true
+    leg_radius: 0.03
+    pose: [2, 3, 0]
+  - name: box
+    size: [1, 1]
+    schedule: [{t: 0, pose: [7, 1, 0]}, {t: 100, pose: [8, 4, 0.5]}]
+markers:
+  - {name: m1, position: [9.9, 2.5]}
+robot:
+  start: [1, 2.5, 0]
+routes:
+  loop: [[1, 2.5], [8, 2.5]]
+)";
+
+std::string errorOf(const std::string& yaml) {
+  try {
+    parseWorld(yaml, "w.yaml");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+}  // namespace
+
+TEST(World, ParsesAllElements) {
+  const World w = parseWorld(kWorld, "/tmp/test.yaml");
+  EXPECT_EQ(w.name, "test");
+  EXPECT_EQ(w.walls.size(), 4u + 2u);
+  EXPECT_FLOAT_EQ(w.walls.back().reflectivity, 0.9F);
+  ASSERT_EQ(w.regions.size(), 2u);
+  EXPECT_EQ(w.regionAt({1, 1}), "left");
+  EXPECT_EQ(w.regionAt({7, 1}), "right");
+  EXPECT_EQ(w.regionAt({11, 1}), "");
+  EXPECT_NEAR(w.region("left")->centroid().x, 2.5, 1e-12);
+  ASSERT_EQ(w.doors.size(), 2u);
+  ASSERT_EQ(w.furniture.size(), 2u);
+  ASSERT_EQ(w.markers.size(), 1u);
+  EXPECT_FLOAT_EQ(w.markers[0].reflectivity, 1.0F);
+  EXPECT_DOUBLE_EQ(w.robot_start.x, 1.0);
+  EXPECT_EQ(w.routes.at("loop").size(), 2u);
+  EXPECT_DOUBLE_EQ(w.bounds_max.x, 10.0);
+}
+
+TEST(World, DoorScheduleIsPeriodic) {
+  const World w = parseWorld(kWorld, "t.yaml");
+  const Door& d = w.doors[0];
+  EXPECT_FALSE(d.isOpen(5));
+  EXPECT_TRUE(d.isOpen(10));
+  EXPECT_TRUE(d.isOpen(19.9));
+  EXPECT_FALSE(d.isOpen(25));
+  EXPECT_TRUE(d.isOpen(45));  // 45 mod 30 = 15
+  EXPECT_TRUE(w.doors[1].isOpen(1e6));
+  // closed: panel hinge->latch; open: swung by +90° about the hinge
+  const Segment closed = d.panel(0), open = d.panel(12);
+  EXPECT_NEAR(closed.b.y, 3.0, 1e-12);
+  EXPECT_NEAR(open.b.x, 4.0, 1e-12);
+  EXPECT_NEAR(open.b.y, 2.0, 1e-12);
+}
+
+TEST(World, FurnitureMovesAndTableShowsOnlyLegs) {
+  const World w = parseWorld(kWorld, "t.yaml");
+  std::vector<Segment> segs;
+  std::vector<Circle> circles;
+  w.furniture[0].geometry(0, segs, circles);
+  EXPECT_TRUE(segs.empty());
+  ASSERT_EQ(circles.size(), 4u);
+  EXPECT_NEAR(circles[0].center.x, 2 + 0.8 - 0.03, 1e-12);
+  EXPECT_NEAR(circles[0].center.y, 3 + 0.4 - 0.03, 1e-12);
+  EXPECT_NEAR(w.furniture[1].poseAt(50).x, 7.0, 1e-12);
+  EXPECT_NEAR(w.furniture[1].poseAt(150).theta, 0.5, 1e-12);
+  segs.clear();
+  w.furniture[1].geometry(150, segs, circles);
+  ASSERT_EQ(segs.size(), 4u);
+  // the four corners lie at distance sqrt(0.5) from the centre
+  for (const auto& s : segs) EXPECT_NEAR(norm(s.a - Vec2{8, 4}), std::sqrt(0.5), 1e-12);
+  std::vector<Segment> dyn;
+  std::vector<Circle> dync;
+  w.dynamicGeometry(0, dyn, dync);
+  EXPECT_EQ(dyn.size(), 2u + 4u);
+  EXPECT_EQ(dync.size(), 4u + 1u);
+}
+
+TEST(WorldErrors, NameFileLineAndKey) {
+  EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\nbogus: 1\n"), "w.yaml:3: unknown key 'bogus'");
+  EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,x]]\n"), "w.yaml:2: 'walls[0][1][1]' must be a number, got 'x'");
+  EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\ndoors:\n  - name: d\n    latch: [1, 1]\n"),
+            "w.yaml:4: missing key 'doors[0].hinge'");
+  EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\ndoors:\n  - hinge: [0,0]\n    latch: [1,0]\n"
+                    "    schedule:\n      - {t: 5, open: true}\n      - {t: 1, open: false}\n"),
+            "w.yaml:8: 'doors[0].schedule[1].t' must be increasing");
+  EXPECT_EQ(errorOf("name: x\n"), "w.yaml:1: world has no geometry: give 'walls', 'segments' or 'map'");
+  const std::string syntax = errorOf("walls: [[0,0],\n  [1,0]\nfoo: [\n");
+  EXPECT_EQ(syntax.rfind("w.yaml:", 0), 0u) << syntax;
+  EXPECT_NE(syntax.find("YAML syntax"), std::string::npos) << syntax;
+  EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\nregions:\n  - {name: a, rect: [0,0,1,1]}\n"
+                    "crowd:\n  sources: [a]\n  sinks: [b]\n  base_rate: 1\n"),
+            "w.yaml:7: 'crowd.sinks': unknown region 'b'");
+  EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\nfurniture:\n  - size: [1, -1]\n    pose: [0,0,0]\n"),
+            "w.yaml:4: 'furniture[0].size' must be positive");
+}
+
+TEST(Occupancy, SinglePixelGivesUnitSquare) {
+  OccupancyImage img{3, 3, std::vector<std::uint8_t>(9, 255)};
+  img.pixels[1 * 3 + 2] = 0;  // row 1 (middle), column 2
+  const auto segs = occupancyToSegments(img, 0.5, {-1.0, -2.0, 0.0}, 0.65, false, 0.3F);
+  ASSERT_EQ(segs.size(), 4u);
+  // column 2, map row 1 -> square [0, 0.5] x [-1.5, -1.0]
+  double xmin = 1e9, xmax = -1e9, ymin = 1e9, ymax = -1e9;
+  for (const auto& s : segs)
+    for (const Vec2 p : {s.a, s.b}) {
+      xmin = std::min(xmin, p.x), xmax = std::max(xmax, p.x);
+      ymin = std::min(ymin, p.y), ymax = std::max(ymax, p.y);
+    }
+  EXPECT_DOUBLE_EQ(xmin, 0.0);
+  EXPECT_DOUBLE_EQ(xmax, 0.5);
+  EXPECT_DOUBLE_EQ(ymin, -1.5);
+  EXPECT_DOUBLE_EQ(ymax, -1.0);
+}
+
+TEST(Occupancy, RunsAreMergedAndNegateWorks) {
+  OccupancyImage img{4, 2, {0, 0, 0, 255, 255, 255, 255, 255}};  // top row: 3 occupied
+  EXPECT_EQ(occupancyToSegments(img, 1.0, {}, 0.65, false, 0.3F).size(), 4u);
+  // negated: white is occupied -> 5 cells in an L shape: 6 boundary runs
+  EXPECT_EQ(occupancyToSegments(img, 1.0, {}, 0.65, true, 0.3F).size(), 6u);
+}
+
+TEST(Occupancy, MapServerYamlWithPgmAndPng) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "cairn_sim_test_world_map";
+  fs::create_directories(dir);
+  {
+    std::ofstream pgm(dir / "m.pgm", std::ios::binary);
+    pgm << "P5\n# comment\n4 2\n255\n";
+    const unsigned char px[8] = {0, 0, 0, 254, 254, 254, 254, 254};
+    pgm.write(reinterpret_cast<const char*>(px), 8);
+  }
+  {
+    std::ofstream y(dir / "m.yaml");
+    y << "image: m.pgm\nresolution: 0.1\norigin: [1.0, 2.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+  }
+  {
+    std::ofstream w(dir / "w.yaml");
+    w << "map: m.yaml\n";
+  }
+  const World w = loadWorld((dir / "w.yaml").string());
+  ASSERT_EQ(w.walls.size(), 4u);
+  EXPECT_NEAR(w.bounds_min.x, 1.0, 1e-12);
+  EXPECT_NEAR(w.bounds_min.y, 2.1, 1e-12);
+  EXPECT_NEAR(w.bounds_max.x, 1.3, 1e-12);
+  EXPECT_NEAR(w.bounds_max.y, 2.2, 1e-12);
+
+  // PNG (3x3 grey, centre black) shipped as test data, referenced inline
+  const std::string png = std::string(CAIRN_SOURCE_ROOT) + "/components/sim/test/data/dot3x3.png";
+  const World wp = parseWorld("map: {image: " + png + ", resolution: 1.0, origin: [0, 0, 0]}\n", "inline.yaml");
+  ASSERT_EQ(wp.walls.size(), 4u);
+  EXPECT_NEAR(wp.bounds_min.x, 1.0, 1e-12);
+  EXPECT_NEAR(wp.bounds_max.y, 2.0, 1e-12);
+
+  // missing image -> error names the map yaml and the image key line
+  {
+    std::ofstream y(dir / "bad.yaml");
+    y << "resolution: 0.1\nimage: nothere.pgm\norigin: [0, 0, 0]\n";
+  }
+  try {
+    parseWorld("map: " + (dir / "bad.yaml").string() + "\n", "w2.yaml");
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), (dir / "bad.yaml").string());
+    EXPECT_EQ(e.line(), 2);
+  }
+}
+
+TEST(World, ShippedWorldsMatchTheirSpecification) {
+  for (const auto& name : shippedWorlds()) {
+    const World w = loadWorld(resolveWorldPath(name));
+    EXPECT_EQ(w.name, name);
+    EXPECT_GT(w.walls.size(), 10u) << name;
+    EXPECT_FALSE(w.doors.empty()) << name;
+    EXPECT_FALSE(w.furniture.empty()) << name;
+    EXPECT_EQ(w.regionAt({w.robot_start.x, w.robot_start.y}).empty(), false) << name;
+  }
+  const World office = loadWorld(resolveWorldPath("office"));
+  EXPECT_DOUBLE_EQ(office.bounds_max.x - office.bounds_min.x, 50.0);
+  EXPECT_DOUBLE_EQ(office.bounds_max.y - office.bounds_min.y, 25.0);
+  bool table_legs_only = false;
+  for (const auto& f : office.furniture) table_legs_only |= f.name == "meeting_table" && f.legs_only;
+  EXPECT_TRUE(table_legs_only);
+  // corridor widths 1.1 .. 2.1 m
+  for (const char* c : {"corridor", "corridor_south", "corridor_north"}) {
+    const Region* r = office.region(c);
+    ASSERT_NE(r, nullptr);
+    const double wx = r->polygon[2].x - r->polygon[0].x, wy = r->polygon[2].y - r->polygon[0].y;
+    EXPECT_GE(std::min(wx, wy), 1.1 - 1e-9) << c;
+    EXPECT_LE(std::min(wx, wy), 2.1 + 1e-9) << c;
+  }
+  const World apt = loadWorld(resolveWorldPath("apartment"));
+  for (const char* room : {"hallway", "bedroom", "living_room", "kitchen"}) EXPECT_NE(apt.region(room), nullptr) << room;
+  const World wh = loadWorld(resolveWorldPath("warehouse"));
+  EXPECT_DOUBLE_EQ((wh.bounds_max.x - wh.bounds_min.x) * (wh.bounds_max.y - wh.bounds_min.y), 2500.0);
+  int rooms = 0;
+  for (const auto& r : wh.regions) rooms += r.name.rfind("room_", 0) == 0;
+  EXPECT_EQ(rooms, 4);
+  EXPECT_FALSE(wh.markers.empty());
+  EXPECT_THROW(resolveWorldPath("no_such_world"), InputError);
+}

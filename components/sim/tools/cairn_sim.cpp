@@ -1,0 +1,242 @@
+// cairn-sim: command-line front end of the simulator core (`cairn sim <verb> ...`).
+//   cairn-sim check <world>                      validate a world file, print a summary
+//   cairn-sim bench [--world <name|file>]... [--json] [--seconds S] [--repeat N] [--seed N]
+//   cairn-sim run --world <name|file> --duration <s> --seed N --out <dir> [...]
+// Bad input: one line `cairn: <file>:<line>: <what>` on stderr, exit code 2.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cairn/sim/laser.hpp"
+#include "cairn/sim/raycast.hpp"
+#include "cairn/sim/rng.hpp"
+#include "cairn/sim/world.hpp"
+
+using namespace cairn::sim;
+
+namespace {
+
+[[noreturn]] void usageError(const std::string& msg) {
+  std::cerr << "cairn: cairn-sim: " << msg << "\n";
+  std::exit(2);
+}
+
+void usage() {
+  std::cout << "usage: cairn-sim <verb> [options]\n"
+               "  check <world>                 validate a world (name or YAML file) and print a summary\n"
+               "  bench [--world W]... [--json] [--seconds S] [--repeat N] [--seed N]\n"
+               "                                ray-casting throughput (720-beam scans/s) vs a naive baseline\n";
+}
+
+// Uniform random free positions inside the world's regions, at least `clearance` from any wall.
+std::vector<Pose2> samplePoses(const World& w, const SegmentGrid& grid, int n, Rng& rng, double clearance) {
+  std::vector<Pose2> out;
+  if (w.regions.empty()) usageError(w.file + ": world has no regions to sample poses in");
+  int guard = 0;
+  while (static_cast<int>(out.size()) < n && ++guard < 1000000) {
+    const Region& r = w.regions[static_cast<std::size_t>(rng.uniform() * w.regions.size())];
+    double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+    for (const auto& p : r.polygon) x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+    const Vec2 p{rng.uniform(x0, x1), rng.uniform(y0, y1)};
+    if (!r.contains(p) || grid.distanceToNearest(p, clearance) < clearance) continue;
+    out.push_back({p.x, p.y, rng.uniform(-std::numbers::pi, std::numbers::pi)});
+  }
+  return out;
+}
+
+struct BenchResult {
+  std::string world;
+  int beams = 0;
+  std::size_t static_segments = 0, dynamic_segments = 0, circles = 0;
+  double cell_size = 0;
+  double scans_per_s = 0, ideal_scans_per_s = 0, naive_scans_per_s = 0;
+  double mean_range = 0;
+};
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+template <class F>
+double rate(double seconds, F&& one) {  // calls one() until `seconds` have passed; returns calls per second
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  long calls = 0;
+  double elapsed = 0;
+  do {
+    for (int k = 0; k < 16; ++k) one();
+    calls += 16;
+    elapsed = std::chrono::duration<double>(clock::now() - t0).count();
+  } while (elapsed < seconds);
+  return static_cast<double>(calls) / elapsed;
+}
+
+BenchResult benchWorld(const std::string& name, double seconds, int repeat, std::uint64_t seed) {
+  const World w = loadWorld(resolveWorldPath(name));
+  const SegmentGrid grid(w.walls);
+  LaserConfig cfg;  // defaults: 360°, 0.5° -> 720 beams, 20 m
+  const LaserSimulator laser(cfg, grid);
+  Rng rng(seed);
+  const auto poses = samplePoses(w, grid, 256, rng, 0.35);
+  // furnished world at t = 0 plus 10 people (20 leg circles) at random free spots
+  std::vector<Segment> dyn;
+  std::vector<Circle> circles;
+  w.dynamicGeometry(0.0, dyn, circles);
+  const auto people = samplePoses(w, grid, 10, rng, 0.35);
+  for (const auto& p : people) {
+    const Vec2 side{-std::sin(p.theta) * 0.1, std::cos(p.theta) * 0.1};
+    circles.push_back({Vec2{p.x, p.y} + side, 0.06, 0.3F});
+    circles.push_back({Vec2{p.x, p.y} - side, 0.06, 0.3F});
+  }
+  std::vector<Segment> all = w.walls;
+  all.insert(all.end(), dyn.begin(), dyn.end());
+
+  BenchResult r;
+  r.world = w.name;
+  r.beams = cfg.beams();
+  r.static_segments = w.walls.size();
+  r.dynamic_segments = dyn.size();
+  r.circles = circles.size();
+  r.cell_size = grid.cellSize();
+
+  std::vector<RayHit> hits;
+  double sum_range = 0;
+  std::size_t n_range = 0;
+  for (const auto& p : poses) {
+    laser.castIdeal(compose(p, cfg.mount), dyn, circles, hits);
+    for (const auto& h : hits) if (h.hit) sum_range += h.range, ++n_range;
+  }
+  r.mean_range = n_range ? sum_range / n_range : 0;
+
+  // Naive baseline: every beam against every segment (static + dynamic) and every circle.
+  const int nb = cfg.beams();
+  std::vector<double> bc(nb), bs(nb);
+  for (int i = 0; i < nb; ++i) bc[i] = std::cos(cfg.angleMin() + i * cfg.resolution), bs[i] = std::sin(cfg.angleMin() + i * cfg.resolution);
+  volatile double sink = 0;
+  std::vector<double> full, ideal, naive;
+  for (int rep = 0; rep < repeat; ++rep) {
+    std::size_t k = 0;
+    LaserScan scan;
+    full.push_back(rate(seconds, [&] {
+      laser.scan(poses[k++ % poses.size()], 0.0, dyn, circles, rng, scan);
+      sink = sink + scan.ranges[0];
+    }));
+    ideal.push_back(rate(seconds, [&] {
+      laser.castIdeal(compose(poses[k++ % poses.size()], cfg.mount), dyn, circles, hits);
+      sink = sink + hits[0].range;
+    }));
+    naive.push_back(rate(seconds, [&] {
+      const Pose2 lp = compose(poses[k++ % poses.size()], cfg.mount);
+      const double c = std::cos(lp.theta), s = std::sin(lp.theta);
+      double acc = 0;
+      for (int i = 0; i < nb; ++i) {
+        const Vec2 d{c * bc[i] - s * bs[i], s * bc[i] + c * bs[i]};
+        RayHit h = castNaive(all, {lp.x, lp.y}, d, cfg.range_max);
+        for (const auto& ci : circles) {
+          const double t = rayCircle({lp.x, lp.y}, d, ci.center, ci.radius);
+          if (t >= 0 && t < h.range) h.range = t;
+        }
+        acc += h.range;
+      }
+      sink = sink + acc;
+    }));
+  }
+  r.scans_per_s = median(full);
+  r.ideal_scans_per_s = median(ideal);
+  r.naive_scans_per_s = median(naive);
+  return r;
+}
+
+std::string jsonResult(const BenchResult& r) {
+  std::ostringstream o;
+  o.precision(6);
+  o << "{\"world\": \"" << r.world << "\", \"beams\": " << r.beams << ", \"scans_per_s\": " << std::round(r.scans_per_s)
+    << ", \"ideal_scans_per_s\": " << std::round(r.ideal_scans_per_s)
+    << ", \"baseline_naive_scans_per_s\": " << std::round(r.naive_scans_per_s)
+    << ", \"speedup_vs_naive\": " << r.ideal_scans_per_s / r.naive_scans_per_s
+    << ", \"static_segments\": " << r.static_segments << ", \"dynamic_segments\": " << r.dynamic_segments
+    << ", \"circles\": " << r.circles << ", \"grid_cell_m\": " << r.cell_size << ", \"mean_hit_range_m\": " << r.mean_range
+    << "}";
+  return o.str();
+}
+
+int cmdBench(int argc, char** argv) {
+  std::vector<std::string> worlds;
+  bool json = false;
+  double seconds = 0.5;
+  int repeat = 3;
+  std::uint64_t seed = 1;
+  for (int i = 0; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) usageError("bench: " + a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--world") worlds.push_back(value());
+    else if (a == "--json") json = true;
+    else if (a == "--seconds") seconds = std::atof(value().c_str());
+    else if (a == "--repeat") repeat = std::max(1, std::atoi(value().c_str()));
+    else if (a == "--seed") seed = std::strtoull(value().c_str(), nullptr, 10);
+    else usageError("bench: unknown option '" + a + "'");
+  }
+  if (worlds.empty() || (worlds.size() == 1 && worlds[0] == "all")) worlds = shippedWorlds();
+  std::vector<BenchResult> results;
+  for (const auto& w : worlds) results.push_back(benchWorld(w, seconds, repeat, seed));
+  if (json) {
+    // One JSON object: the first world's figures at top level, every world under "worlds".
+    const BenchResult& f = results.front();
+    std::cout << "{\"world\": \"" << f.world << "\", \"beams\": " << f.beams << ", \"scans_per_s\": " << std::round(f.scans_per_s)
+              << ", \"baseline_naive_scans_per_s\": " << std::round(f.naive_scans_per_s) << ", \"repeat\": " << repeat
+              << ", \"seconds_per_run\": " << seconds << ", \"worlds\": {";
+    for (std::size_t i = 0; i < results.size(); ++i)
+      std::cout << (i ? ", " : "") << "\"" << results[i].world << "\": " << jsonResult(results[i]);
+    std::cout << "}}\n";
+  } else {
+    for (const auto& r : results)
+      std::printf("%-10s %4d beams  %9.0f scans/s (noise incl.)  %9.0f ideal  naive baseline %8.0f  x%.1f\n",
+                  r.world.c_str(), r.beams, r.scans_per_s, r.ideal_scans_per_s, r.naive_scans_per_s,
+                  r.ideal_scans_per_s / r.naive_scans_per_s);
+  }
+  return 0;
+}
+
+int cmdCheck(int argc, char** argv) {
+  if (argc != 1) usageError("check: expected one world name or file");
+  const World w = loadWorld(resolveWorldPath(argv[0]));
+  std::printf("%s: %zu wall segments, %zu regions, %zu doors, %zu furniture, %zu markers, %zu routes, bounds "
+              "[%.2f, %.2f] x [%.2f, %.2f]\n",
+              w.name.c_str(), w.walls.size(), w.regions.size(), w.doors.size(), w.furniture.size(), w.markers.size(),
+              w.routes.size(), w.bounds_min.x, w.bounds_max.x, w.bounds_min.y, w.bounds_max.y);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    usage();
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string verb = argv[1];
+  try {
+    if (verb == "bench") return cmdBench(argc - 2, argv + 2);
+    if (verb == "check") return cmdCheck(argc - 2, argv + 2);
+  } catch (const InputError& e) {
+    std::cerr << "cairn: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "cairn: cairn-sim " << verb << ": " << e.what() << "\n";
+    return 2;
+  }
+  usageError("unknown verb '" + verb + "' (try --help)");
+}
