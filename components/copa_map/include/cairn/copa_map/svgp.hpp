@@ -1,0 +1,200 @@
+// Sparse variational GP with one or two latent functions (Stüde 2024, §4.2.3-4.2.5; Saul et al. 2016 chained
+// GP; Salimbeni et al. 2018 natural gradients). CoPA-Map uses two latents f, g with the heteroscedastic
+// Gaussian likelihood y ~ N(f, softplus(g)) (eq. 4.7); GP-Hom uses one latent with a Poisson likelihood.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cairn/copa_map/kernels.hpp"
+
+namespace cairn::copa_map {
+
+// Marginals q(f_i) = N(m_i, v_i) of one latent over a batch (eqs. 4.13-4.16).
+struct LatentMoments {
+  Eigen::VectorXd m, v;
+};
+
+// Gauss–Hermite nodes and weights for ∫ exp(-x²) h(x) dx (Golub–Welsch).
+void gaussHermite(int order, Eigen::VectorXd& nodes, Eigen::VectorXd& weights);
+
+class Likelihood {
+ public:
+  virtual ~Likelihood() = default;
+  virtual std::string type() const = 0;
+  virtual int numLatent() const = 0;
+  // Σ_i E_q[log p(y_i | latents_i)] and, if grad != nullptr, its derivatives w.r.t. every m_i and v_i.
+  virtual double variationalExpectations(const Eigen::VectorXd& y, const std::vector<LatentMoments>& q,
+                                         std::vector<LatentMoments>* grad) const = 0;
+  // Predictive mean and variance of y (eq. 4.19).
+  virtual void predict(const std::vector<LatentMoments>& q, Eigen::VectorXd& mean, Eigen::VectorXd& var) const = 0;
+  // log p(y_i*) = log ∫ p(y*|latents) q(latents) (for NLPD).
+  virtual Eigen::VectorXd logPredictiveDensity(const Eigen::VectorXd& y,
+                                               const std::vector<LatentMoments>& q) const = 0;
+  virtual std::unique_ptr<Likelihood> clone() const = 0;
+};
+
+// y ~ N(f, ζ(g)), ζ = softplus (eq. 4.7). The expectation over f is closed form (the integrand is quadratic in
+// f, where 2D Gauss–Hermite is exact); the one over g uses Gauss–Hermite quadrature (eqs. 4.12, 4.19).
+class HeteroscedasticGaussianLikelihood final : public Likelihood {
+ public:
+  explicit HeteroscedasticGaussianLikelihood(int gh_order = 20, double min_variance = 1e-6);
+  std::string type() const override { return "heteroscedastic_gaussian_softplus"; }
+  int numLatent() const override { return 2; }
+  double variationalExpectations(const Eigen::VectorXd& y, const std::vector<LatentMoments>& q,
+                                 std::vector<LatentMoments>* grad) const override;
+  void predict(const std::vector<LatentMoments>& q, Eigen::VectorXd& mean, Eigen::VectorXd& var) const override;
+  Eigen::VectorXd logPredictiveDensity(const Eigen::VectorXd& y, const std::vector<LatentMoments>& q) const override;
+  std::unique_ptr<Likelihood> clone() const override {
+    return std::make_unique<HeteroscedasticGaussianLikelihood>(*this);
+  }
+  int ghOrder() const { return static_cast<int>(nodes_.size()); }
+
+ private:
+  Eigen::VectorXd nodes_, weights_;
+  double min_var_;
+};
+
+// y ~ N(f, σ²) with fixed σ² (used to check the SVGP against exact GP regression).
+class GaussianLikelihood final : public Likelihood {
+ public:
+  explicit GaussianLikelihood(double variance) : var_(variance) {}
+  std::string type() const override { return "gaussian"; }
+  int numLatent() const override { return 1; }
+  double variationalExpectations(const Eigen::VectorXd& y, const std::vector<LatentMoments>& q,
+                                 std::vector<LatentMoments>* grad) const override;
+  void predict(const std::vector<LatentMoments>& q, Eigen::VectorXd& mean, Eigen::VectorXd& var) const override;
+  Eigen::VectorXd logPredictiveDensity(const Eigen::VectorXd& y, const std::vector<LatentMoments>& q) const override;
+  std::unique_ptr<Likelihood> clone() const override { return std::make_unique<GaussianLikelihood>(*this); }
+  double variance() const { return var_; }
+
+ private:
+  double var_;
+};
+
+// y ~ Poisson(exp f) (log-Gaussian Cox process, GP-Hom baseline, §4.3.2). Expectations are closed form.
+class PoissonLikelihood final : public Likelihood {
+ public:
+  explicit PoissonLikelihood(int gh_order = 20);
+  std::string type() const override { return "poisson_exp"; }
+  int numLatent() const override { return 1; }
+  double variationalExpectations(const Eigen::VectorXd& y, const std::vector<LatentMoments>& q,
+                                 std::vector<LatentMoments>* grad) const override;
+  void predict(const std::vector<LatentMoments>& q, Eigen::VectorXd& mean, Eigen::VectorXd& var) const override;
+  Eigen::VectorXd logPredictiveDensity(const Eigen::VectorXd& y, const std::vector<LatentMoments>& q) const override;
+  std::unique_ptr<Likelihood> clone() const override { return std::make_unique<PoissonLikelihood>(*this); }
+
+ private:
+  Eigen::VectorXd nodes_, weights_;
+};
+
+std::unique_ptr<Likelihood> makeLikelihood(const std::string& type, double param);
+
+// One latent GP with inducing inputs Z and q(u) = N(mu, L Lᵀ), L lower triangular (§4.2.5).
+struct LatentGp {
+  std::unique_ptr<Kernel> kernel;
+  Eigen::MatrixXd Z;   // m x 3
+  Eigen::VectorXd mu;  // m
+  Eigen::MatrixXd L;   // m x m lower triangular
+
+  LatentGp() = default;
+  LatentGp(std::unique_ptr<Kernel> k, Eigen::MatrixXd z, double init_sqrt_scale = 1.0);
+  LatentGp(const LatentGp& o);
+  LatentGp& operator=(const LatentGp& o);
+  LatentGp(LatentGp&&) = default;
+  LatentGp& operator=(LatentGp&&) = default;
+};
+
+// Result of one ELBO evaluation on a mini-batch, with everything the optimizers need.
+struct ElboEvaluation {
+  double elbo = 0;  // scale * Σ_batch E[log p] - Σ KL (eq. 4.12)
+  double ell = 0;   // unscaled Σ_batch E[log p]
+  double kl = 0;
+  Eigen::VectorXd hyper_grad;  // ∂elbo/∂(unconstrained kernel parameters of all latents, concatenated)
+  struct PerLatent {
+    Eigen::MatrixXd Kinv;  // K_uu⁻¹
+    Eigen::VectorXd b;     // Aᵀ ∂E/∂m   (A = K_nu K_uu⁻¹)
+    Eigen::MatrixXd Q;     // Aᵀ diag(∂E/∂v) A
+    Eigen::VectorXd grad_mu;  // ∂elbo/∂μ
+  };
+  std::vector<PerLatent> latent;
+};
+
+class SvgpModel {
+ public:
+  SvgpModel() = default;
+  SvgpModel(std::vector<LatentGp> latents, std::unique_ptr<Likelihood> lik, double jitter = 1e-5);
+  SvgpModel(const SvgpModel& o);
+  SvgpModel& operator=(const SvgpModel& o);
+  SvgpModel(SvgpModel&&) = default;
+  SvgpModel& operator=(SvgpModel&&) = default;
+
+  // ELBO (eq. 4.12) on a batch; `scale` = n / batch size makes it an unbiased estimate of the full bound.
+  ElboEvaluation evaluate(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, double scale,
+                          bool hyper_grad) const;
+  // q(f*) marginals of latent k (eqs. 4.13-4.16), computed in chunks.
+  LatentMoments latentMoments(int k, const Eigen::MatrixXd& X) const;
+  // Predictive mean and variance of y in model (standardized) units.
+  void predictY(const Eigen::MatrixXd& X, Eigen::VectorXd& mean, Eigen::VectorXd& var) const;
+  Eigen::VectorXd logPredictiveDensity(const Eigen::MatrixXd& X, const Eigen::VectorXd& y) const;
+
+  // One natural-gradient step of size gamma on q(u_k) (Salimbeni et al. 2018) from an evaluation. Returns the
+  // step actually taken (halved until the new precision is positive definite), 0 when no step was possible.
+  double naturalGradientStep(int k, const ElboEvaluation& ev, double scale, double gamma);
+
+  Eigen::VectorXd hyperParams() const;
+  void setHyperParams(const Eigen::VectorXd& p);
+  Eigen::VectorXd hyperLowerBounds() const;
+  Eigen::VectorXd hyperUpperBounds() const;
+  int numHyperParams() const;
+
+  std::vector<LatentGp>& latents() { return latents_; }
+  const std::vector<LatentGp>& latents() const { return latents_; }
+  const Likelihood& likelihood() const { return *lik_; }
+  double jitter() const { return jitter_; }
+
+ private:
+  std::vector<LatentGp> latents_;
+  std::unique_ptr<Likelihood> lik_;
+  double jitter_ = 1e-5;
+};
+
+struct TrainConfig {
+  int batch_size = 2000;             // mini-batch size (copa-map: 1,100; not given in the thesis)
+  int max_iterations = 2000;
+  double max_seconds = 600.0;
+  double natgrad_gamma_start = 0.1;  // natural-gradient step γ, linear schedule (copa-map: 0.1 -> 0.01)
+  double natgrad_gamma_end = 0.1;
+  double adam_lr_start = 1e-2;       // Adam on kernel hyperparameters (copa-map: 1e-2 -> 1e-3)
+  double adam_lr_end = 1e-3;
+  int decay_steps = 100;             // linear decay over the first 100 steps (§4.2.5)
+  bool train_hyper = true;
+  int hyper_warmup = 0;              // natural-gradient-only steps before Adam starts
+  double tolerance = 1e-3;           // stop when the epoch-mean ELBO changes relatively less (copa-map: 1e-3)
+  int min_epochs = 2;
+  std::uint64_t seed = 1;
+  // Called after every step with (iteration, mini-batch ELBO per point, elapsed seconds).
+  std::function<void(int, double, double)> progress;
+};
+
+struct TrainReport {
+  int iterations = 0;
+  int epochs = 0;
+  double seconds = 0;
+  double final_elbo = 0;  // mean mini-batch ELBO of the last epoch, per data point
+  bool converged = false;
+  bool diverged = false;
+  std::string message;
+  std::vector<double> epoch_elbo;
+};
+
+// Alternating natural-gradient (variational parameters) and Adam (hyperparameters) steps on mini-batches
+// (§4.2.5). On a non-finite ELBO the last good parameters are restored and training stops with a message.
+TrainReport trainSvgp(SvgpModel& model, const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
+                      const TrainConfig& cfg);
+
+}  // namespace cairn::copa_map

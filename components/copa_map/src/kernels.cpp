@@ -1,0 +1,273 @@
+#include "cairn/copa_map/kernels.hpp"
+
+#include <omp.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace cairn::copa_map {
+namespace {
+
+constexpr double kSqrt5 = 2.23606797749978969641;
+constexpr double kPi = 3.14159265358979323846;
+
+// 1D Matérn-5/2 with unit variance (eq. 4.9) and its derivative w.r.t. log l.
+inline void matern52(double d, double l, double& k, double& dk_dlogl) {
+  const double r = std::abs(d) / l;
+  const double e = std::exp(-kSqrt5 * r);
+  k = (1.0 + kSqrt5 * r + 5.0 / 3.0 * r * r) * e;
+  dk_dlogl = 5.0 / 3.0 * r * r * (1.0 + kSqrt5 * r) * e;
+}
+
+// Thread-local partial sums reduced at the end (gradients).
+Eigen::VectorXd reduce(const std::vector<Eigen::VectorXd>& parts, int n) {
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+  for (const auto& p : parts) g += p;
+  return g;
+}
+
+}  // namespace
+
+SpatioTemporalKernel::SpatioTemporalKernel(double ls1, double ls2, std::vector<PeriodicComponent> comps)
+    : ls1_(ls1), ls2_(ls2), comps_(std::move(comps)) {
+  if (!(ls1 > 0) || !(ls2 > 0)) throw std::invalid_argument("SpatioTemporalKernel: length scales must be > 0");
+  for (const auto& c : comps_)
+    if (!(c.variance > 0) || !(c.period > 0) || !(c.lengthscale > 0))
+      throw std::invalid_argument("SpatioTemporalKernel: periodic parameters must be > 0");
+}
+
+Eigen::VectorXd SpatioTemporalKernel::params() const {
+  Eigen::VectorXd p(numParams());
+  p[0] = std::log(ls1_);
+  p[1] = std::log(ls2_);
+  for (std::size_t i = 0; i < comps_.size(); ++i) {
+    p[2 + 3 * i] = std::log(comps_[i].variance);
+    p[3 + 3 * i] = std::log(comps_[i].period);
+    p[4 + 3 * i] = std::log(comps_[i].lengthscale);
+  }
+  return p;
+}
+
+void SpatioTemporalKernel::setParams(const Eigen::VectorXd& p) {
+  if (p.size() != numParams()) throw std::invalid_argument("SpatioTemporalKernel::setParams: wrong size");
+  ls1_ = std::exp(p[0]);
+  ls2_ = std::exp(p[1]);
+  for (std::size_t i = 0; i < comps_.size(); ++i) {
+    comps_[i].variance = std::exp(p[2 + 3 * i]);
+    comps_[i].period = std::exp(p[3 + 3 * i]);
+    comps_[i].lengthscale = std::exp(p[4 + 3 * i]);
+  }
+}
+
+std::vector<std::string> SpatioTemporalKernel::paramNames() const {
+  std::vector<std::string> n{"log_lengthscale_x1", "log_lengthscale_x2"};
+  for (std::size_t i = 0; i < comps_.size(); ++i) {
+    n.push_back("log_periodic_variance_" + std::to_string(i));
+    n.push_back("log_period_" + std::to_string(i));
+    n.push_back("log_periodic_lengthscale_" + std::to_string(i));
+  }
+  return n;
+}
+
+Eigen::VectorXd SpatioTemporalKernel::lowerBounds() const {
+  Eigen::VectorXd b(numParams());
+  b[0] = b[1] = std::log(min_lengthscale);
+  for (std::size_t i = 0; i < comps_.size(); ++i) {
+    b[2 + 3 * i] = std::log(1e-6);
+    b[3 + 3 * i] = std::log(min_period);
+    b[4 + 3 * i] = std::log(0.05);
+  }
+  return b;
+}
+
+Eigen::VectorXd SpatioTemporalKernel::upperBounds() const {
+  Eigen::VectorXd b(numParams());
+  b[0] = b[1] = std::log(max_lengthscale);
+  for (std::size_t i = 0; i < comps_.size(); ++i) {
+    b[2 + 3 * i] = std::log(100.0);
+    b[3 + 3 * i] = std::log(max_period);
+    b[4 + 3 * i] = std::log(100.0);
+  }
+  return b;
+}
+
+Eigen::MatrixXd SpatioTemporalKernel::K(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2) const {
+  const Eigen::Index n1 = X1.rows(), n2 = X2.rows();
+  Eigen::MatrixXd out(n1, n2);
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index j = 0; j < n2; ++j) {
+    for (Eigen::Index i = 0; i < n1; ++i) {
+      double k1, k2, tmp;
+      matern52(X1(i, 0) - X2(j, 0), ls1_, k1, tmp);
+      matern52(X1(i, 1) - X2(j, 1), ls2_, k2, tmp);
+      const double dt = X1(i, 2) - X2(j, 2);
+      double kt = 0.0;
+      for (const auto& c : comps_) {
+        const double s = std::sin(kPi * dt / c.period);
+        kt += c.variance * std::exp(-0.5 * s * s / (c.lengthscale * c.lengthscale));  // eq. 4.10
+      }
+      out(i, j) = k1 * k2 * kt;  // eq. 4.8
+    }
+  }
+  return out;
+}
+
+Eigen::VectorXd SpatioTemporalKernel::Kdiag(const Eigen::MatrixXd& X) const {
+  double kt = 0.0;
+  for (const auto& c : comps_) kt += c.variance;
+  return Eigen::VectorXd::Constant(X.rows(), kt);
+}
+
+Eigen::VectorXd SpatioTemporalKernel::gradK(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2,
+                                            const Eigen::MatrixXd& G) const {
+  const int np = numParams();
+  const Eigen::Index n1 = X1.rows(), n2 = X2.rows();
+  std::vector<Eigen::VectorXd> parts(static_cast<std::size_t>(omp_get_max_threads()),
+                                     Eigen::VectorXd::Zero(np));
+#pragma omp parallel
+  {
+    Eigen::VectorXd& acc = parts[static_cast<std::size_t>(omp_get_thread_num())];
+    std::vector<double> pc(comps_.size()), sc(comps_.size()), arg(comps_.size());
+#pragma omp for schedule(static)
+    for (Eigen::Index j = 0; j < n2; ++j) {
+      for (Eigen::Index i = 0; i < n1; ++i) {
+        const double gij = G(i, j);
+        if (gij == 0.0) continue;
+        double k1, d1, k2, d2;
+        matern52(X1(i, 0) - X2(j, 0), ls1_, k1, d1);
+        matern52(X1(i, 1) - X2(j, 1), ls2_, k2, d2);
+        const double dt = X1(i, 2) - X2(j, 2);
+        double kt = 0.0;
+        for (std::size_t c = 0; c < comps_.size(); ++c) {
+          arg[c] = kPi * dt / comps_[c].period;
+          sc[c] = std::sin(arg[c]);
+          pc[c] = comps_[c].variance *
+                  std::exp(-0.5 * sc[c] * sc[c] / (comps_[c].lengthscale * comps_[c].lengthscale));
+          kt += pc[c];
+        }
+        acc[0] += gij * d1 * k2 * kt;
+        acc[1] += gij * k1 * d2 * kt;
+        const double ks = gij * k1 * k2;
+        for (std::size_t c = 0; c < comps_.size(); ++c) {
+          const double l2 = comps_[c].lengthscale * comps_[c].lengthscale;
+          acc[2 + 3 * c] += ks * pc[c];                                             // ∂/∂log σ²
+          acc[3 + 3 * c] += ks * pc[c] * sc[c] * std::cos(arg[c]) * arg[c] / l2;    // ∂/∂log p
+          acc[4 + 3 * c] += ks * pc[c] * sc[c] * sc[c] / l2;                        // ∂/∂log l
+        }
+      }
+    }
+  }
+  return reduce(parts, np);
+}
+
+Eigen::VectorXd SpatioTemporalKernel::gradKdiag(const Eigen::MatrixXd& X, const Eigen::VectorXd& g) const {
+  (void)X;
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(numParams());
+  const double s = g.sum();
+  for (std::size_t c = 0; c < comps_.size(); ++c) out[2 + 3 * c] = s * comps_[c].variance;
+  return out;
+}
+
+RbfKernel::RbfKernel(double variance, Eigen::Vector3d lengthscales) : var_(variance), ls_(lengthscales) {
+  if (!(variance > 0) || !(lengthscales.minCoeff() > 0))
+    throw std::invalid_argument("RbfKernel: variance and length scales must be > 0");
+}
+
+Eigen::VectorXd RbfKernel::params() const {
+  Eigen::VectorXd p(4);
+  p << std::log(var_), std::log(ls_[0]), std::log(ls_[1]), std::log(ls_[2]);
+  return p;
+}
+
+void RbfKernel::setParams(const Eigen::VectorXd& p) {
+  if (p.size() != 4) throw std::invalid_argument("RbfKernel::setParams: wrong size");
+  var_ = std::exp(p[0]);
+  for (int d = 0; d < 3; ++d) ls_[d] = std::exp(p[1 + d]);
+}
+
+std::vector<std::string> RbfKernel::paramNames() const {
+  return {"log_variance", "log_lengthscale_x1", "log_lengthscale_x2", "log_lengthscale_t"};
+}
+
+Eigen::VectorXd RbfKernel::lowerBounds() const {
+  Eigen::VectorXd b(4);
+  b << std::log(1e-4), std::log(0.05), std::log(0.05), std::log(0.05);
+  return b;
+}
+
+Eigen::VectorXd RbfKernel::upperBounds() const {
+  Eigen::VectorXd b(4);
+  b << std::log(1e3), std::log(1e4), std::log(1e4), std::log(1e5);
+  return b;
+}
+
+Eigen::MatrixXd RbfKernel::K(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2) const {
+  const Eigen::Index n1 = X1.rows(), n2 = X2.rows();
+  Eigen::MatrixXd out(n1, n2);
+  const Eigen::Vector3d il = ls_.cwiseInverse();
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index j = 0; j < n2; ++j)
+    for (Eigen::Index i = 0; i < n1; ++i) {
+      double q = 0.0;
+      for (int d = 0; d < 3; ++d) {
+        const double u = (X1(i, d) - X2(j, d)) * il[d];
+        q += u * u;
+      }
+      out(i, j) = var_ * std::exp(-0.5 * q);  // eq. 4.11
+    }
+  return out;
+}
+
+Eigen::VectorXd RbfKernel::Kdiag(const Eigen::MatrixXd& X) const {
+  return Eigen::VectorXd::Constant(X.rows(), var_);
+}
+
+Eigen::VectorXd RbfKernel::gradK(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2,
+                                 const Eigen::MatrixXd& G) const {
+  const Eigen::Index n1 = X1.rows(), n2 = X2.rows();
+  const Eigen::Vector3d il = ls_.cwiseInverse();
+  std::vector<Eigen::VectorXd> parts(static_cast<std::size_t>(omp_get_max_threads()), Eigen::VectorXd::Zero(4));
+#pragma omp parallel
+  {
+    Eigen::VectorXd& acc = parts[static_cast<std::size_t>(omp_get_thread_num())];
+#pragma omp for schedule(static)
+    for (Eigen::Index j = 0; j < n2; ++j)
+      for (Eigen::Index i = 0; i < n1; ++i) {
+        double u[3], q = 0.0;
+        for (int d = 0; d < 3; ++d) {
+          u[d] = (X1(i, d) - X2(j, d)) * il[d];
+          q += u[d] * u[d];
+        }
+        const double k = G(i, j) * var_ * std::exp(-0.5 * q);
+        acc[0] += k;
+        for (int d = 0; d < 3; ++d) acc[1 + d] += k * u[d] * u[d];
+      }
+  }
+  return reduce(parts, 4);
+}
+
+Eigen::VectorXd RbfKernel::gradKdiag(const Eigen::MatrixXd& X, const Eigen::VectorXd& g) const {
+  (void)X;
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(4);
+  out[0] = g.sum() * var_;
+  return out;
+}
+
+std::unique_ptr<Kernel> makeKernel(const std::string& type, const Eigen::VectorXd& params) {
+  if (type == "rbf_ard3") {
+    auto k = std::make_unique<RbfKernel>(1.0, Eigen::Vector3d::Ones());
+    k->setParams(params);
+    return k;
+  }
+  if (type == "matern52x2_periodic_sum") {
+    if (params.size() < 2 || (params.size() - 2) % 3 != 0)
+      throw std::invalid_argument("makeKernel: bad parameter count for " + type);
+    auto k = std::make_unique<SpatioTemporalKernel>(
+        1.0, 1.0, std::vector<PeriodicComponent>(static_cast<std::size_t>((params.size() - 2) / 3)));
+    k->setParams(params);
+    return k;
+  }
+  throw std::invalid_argument("makeKernel: unknown kernel type '" + type + "'");
+}
+
+}  // namespace cairn::copa_map

@@ -1,0 +1,518 @@
+#include "cairn/copa_map/svgp.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <stdexcept>
+
+namespace cairn::copa_map {
+namespace {
+
+constexpr double kLog2Pi = 1.83787706640934548356;
+constexpr double kSqrtPi = 1.77245385090551602730;
+
+inline double softplus(double x) { return x > 30.0 ? x : std::log1p(std::exp(x)); }
+inline double logistic(double x) {
+  return x >= 0 ? 1.0 / (1.0 + std::exp(-x)) : std::exp(x) / (1.0 + std::exp(x));
+}
+
+double logSumExp(const Eigen::VectorXd& a) {
+  const double m = a.maxCoeff();
+  return m + std::log((a.array() - m).exp().sum());
+}
+
+}  // namespace
+
+void gaussHermite(int order, Eigen::VectorXd& nodes, Eigen::VectorXd& weights) {
+  if (order < 1) throw std::invalid_argument("gaussHermite: order must be >= 1");
+  // Golub–Welsch: Jacobi matrix of the (physicists') Hermite polynomials.
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(order, order);
+  for (int k = 1; k < order; ++k) J(k, k - 1) = J(k - 1, k) = std::sqrt(k / 2.0);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
+  nodes = es.eigenvalues();
+  weights = kSqrtPi * es.eigenvectors().row(0).transpose().array().square();
+}
+
+// ---------------------------------------------------------------------------------------------- likelihoods
+
+HeteroscedasticGaussianLikelihood::HeteroscedasticGaussianLikelihood(int gh_order, double min_variance)
+    : min_var_(min_variance) {
+  gaussHermite(gh_order, nodes_, weights_);
+}
+
+double HeteroscedasticGaussianLikelihood::variationalExpectations(const Eigen::VectorXd& y,
+                                                                  const std::vector<LatentMoments>& q,
+                                                                  std::vector<LatentMoments>* grad) const {
+  const Eigen::Index n = y.size();
+  const auto& f = q[0];
+  const auto& g = q[1];
+  if (grad) {
+    grad->assign(2, LatentMoments{Eigen::VectorXd(n), Eigen::VectorXd(n)});
+  }
+  const Eigen::Index K = nodes_.size();
+  double total = 0.0;
+#pragma omp parallel for reduction(+ : total) schedule(static)
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double r = (y[i] - f.m[i]) * (y[i] - f.m[i]) + f.v[i];
+    const double sd = std::sqrt(2.0 * std::max(g.v[i], 0.0));
+    double e = 0, inv = 0, dmg = 0, dvg = 0;
+    for (Eigen::Index k = 0; k < K; ++k) {
+      const double w = weights_[k] / kSqrtPi;
+      const double gk = g.m[i] + sd * nodes_[k];
+      const double s = softplus(gk) + min_var_;
+      // E_q(f)[log N(y | f, s)] in closed form, then Gauss–Hermite over g (eqs. 4.12, 4.19).
+      e += w * (-0.5 * kLog2Pi - 0.5 * std::log(s) - r / (2.0 * s));
+      inv += w / s;
+      const double hp = (-0.5 / s + r / (2.0 * s * s)) * logistic(gk);
+      dmg += w * hp;
+      dvg += w * hp * nodes_[k];
+    }
+    total += e;
+    if (grad) {
+      (*grad)[0].m[i] = (y[i] - f.m[i]) * inv;
+      (*grad)[0].v[i] = -0.5 * inv;
+      (*grad)[1].m[i] = dmg;
+      (*grad)[1].v[i] = sd > 1e-300 ? dvg / sd : 0.0;
+    }
+  }
+  return total;
+}
+
+void HeteroscedasticGaussianLikelihood::predict(const std::vector<LatentMoments>& q, Eigen::VectorXd& mean,
+                                                Eigen::VectorXd& var) const {
+  const Eigen::Index n = q[0].m.size();
+  mean = q[0].m;
+  var.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double sd = std::sqrt(2.0 * std::max(q[1].v[i], 0.0));
+    double es = 0;
+    for (Eigen::Index k = 0; k < nodes_.size(); ++k)
+      es += weights_[k] / kSqrtPi * (softplus(q[1].m[i] + sd * nodes_[k]) + min_var_);
+    var[i] = q[0].v[i] + es;  // law of total variance, E over g by Gauss–Hermite (eq. 4.19)
+  }
+}
+
+Eigen::VectorXd HeteroscedasticGaussianLikelihood::logPredictiveDensity(const Eigen::VectorXd& y,
+                                                                        const std::vector<LatentMoments>& q) const {
+  const Eigen::Index n = y.size(), K = nodes_.size();
+  Eigen::VectorXd out(n), a(K);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double sd = std::sqrt(2.0 * std::max(q[1].v[i], 0.0));
+    for (Eigen::Index k = 0; k < K; ++k) {
+      const double s = q[0].v[i] + softplus(q[1].m[i] + sd * nodes_[k]) + min_var_;
+      const double d = y[i] - q[0].m[i];
+      a[k] = std::log(weights_[k] / kSqrtPi) - 0.5 * (kLog2Pi + std::log(s) + d * d / s);
+    }
+    out[i] = logSumExp(a);
+  }
+  return out;
+}
+
+double GaussianLikelihood::variationalExpectations(const Eigen::VectorXd& y, const std::vector<LatentMoments>& q,
+                                                   std::vector<LatentMoments>* grad) const {
+  const auto& f = q[0];
+  const Eigen::ArrayXd d = y - f.m;
+  if (grad) {
+    grad->assign(1, LatentMoments{});
+    (*grad)[0].m = (d / var_).matrix();
+    (*grad)[0].v = Eigen::VectorXd::Constant(y.size(), -0.5 / var_);
+  }
+  return (-0.5 * (kLog2Pi + std::log(var_)) - (d.square() + f.v.array()) / (2 * var_)).sum();
+}
+
+void GaussianLikelihood::predict(const std::vector<LatentMoments>& q, Eigen::VectorXd& mean,
+                                 Eigen::VectorXd& var) const {
+  mean = q[0].m;
+  var = q[0].v.array() + var_;
+}
+
+Eigen::VectorXd GaussianLikelihood::logPredictiveDensity(const Eigen::VectorXd& y,
+                                                         const std::vector<LatentMoments>& q) const {
+  const Eigen::ArrayXd s = q[0].v.array() + var_;
+  return (-0.5 * (kLog2Pi + s.log() + (y - q[0].m).array().square() / s)).matrix();
+}
+
+PoissonLikelihood::PoissonLikelihood(int gh_order) { gaussHermite(gh_order, nodes_, weights_); }
+
+double PoissonLikelihood::variationalExpectations(const Eigen::VectorXd& y, const std::vector<LatentMoments>& q,
+                                                  std::vector<LatentMoments>* grad) const {
+  // E_q[y f - exp(f) - log y!] = y m - exp(m + v/2) - lgamma(y+1) (GP-Hom, §4.3.2).
+  const auto& f = q[0];
+  const Eigen::Index n = y.size();
+  if (grad) grad->assign(1, LatentMoments{Eigen::VectorXd(n), Eigen::VectorXd(n)});
+  double total = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double e = std::exp(f.m[i] + 0.5 * f.v[i]);
+    total += y[i] * f.m[i] - e - std::lgamma(y[i] + 1.0);
+    if (grad) {
+      (*grad)[0].m[i] = y[i] - e;
+      (*grad)[0].v[i] = -0.5 * e;
+    }
+  }
+  return total;
+}
+
+void PoissonLikelihood::predict(const std::vector<LatentMoments>& q, Eigen::VectorXd& mean,
+                                Eigen::VectorXd& var) const {
+  const Eigen::ArrayXd m = q[0].m.array(), v = q[0].v.array();
+  mean = (m + 0.5 * v).exp().matrix();
+  var = (mean.array() + (v.exp() - 1.0) * (2.0 * m + v).exp()).matrix();
+}
+
+Eigen::VectorXd PoissonLikelihood::logPredictiveDensity(const Eigen::VectorXd& y,
+                                                        const std::vector<LatentMoments>& q) const {
+  const Eigen::Index n = y.size(), K = nodes_.size();
+  Eigen::VectorXd out(n), a(K);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double sd = std::sqrt(2.0 * std::max(q[0].v[i], 0.0));
+    for (Eigen::Index k = 0; k < K; ++k) {
+      const double fk = q[0].m[i] + sd * nodes_[k];
+      a[k] = std::log(weights_[k] / kSqrtPi) + y[i] * fk - std::exp(fk) - std::lgamma(y[i] + 1.0);
+    }
+    out[i] = logSumExp(a);
+  }
+  return out;
+}
+
+std::unique_ptr<Likelihood> makeLikelihood(const std::string& type, double param) {
+  if (type == "heteroscedastic_gaussian_softplus")
+    return std::make_unique<HeteroscedasticGaussianLikelihood>(static_cast<int>(param));
+  if (type == "gaussian") return std::make_unique<GaussianLikelihood>(param);
+  if (type == "poisson_exp") return std::make_unique<PoissonLikelihood>(static_cast<int>(param));
+  throw std::invalid_argument("makeLikelihood: unknown likelihood '" + type + "'");
+}
+
+// ------------------------------------------------------------------------------------------------- latents
+
+LatentGp::LatentGp(std::unique_ptr<Kernel> k, Eigen::MatrixXd z, double init_sqrt_scale)
+    : kernel(std::move(k)), Z(std::move(z)) {
+  mu = Eigen::VectorXd::Zero(Z.rows());
+  // GPflow-style start q(u) = N(0, s² K_uu): L = s chol(K_uu).
+  Eigen::MatrixXd Kuu = kernel->K(Z, Z);
+  Kuu.diagonal().array() += 1e-6 * std::max(1.0, Kuu.diagonal().mean());
+  Eigen::LLT<Eigen::MatrixXd> llt(Kuu);
+  L = init_sqrt_scale * Eigen::MatrixXd(llt.matrixL());
+}
+
+LatentGp::LatentGp(const LatentGp& o) : kernel(o.kernel ? o.kernel->clone() : nullptr), Z(o.Z), mu(o.mu), L(o.L) {}
+
+LatentGp& LatentGp::operator=(const LatentGp& o) {
+  if (this != &o) {
+    kernel = o.kernel ? o.kernel->clone() : nullptr;
+    Z = o.Z;
+    mu = o.mu;
+    L = o.L;
+  }
+  return *this;
+}
+
+SvgpModel::SvgpModel(std::vector<LatentGp> latents, std::unique_ptr<Likelihood> lik, double jitter)
+    : latents_(std::move(latents)), lik_(std::move(lik)), jitter_(jitter) {
+  if (!lik_ || static_cast<int>(latents_.size()) != lik_->numLatent())
+    throw std::invalid_argument("SvgpModel: number of latents does not match the likelihood");
+}
+
+SvgpModel::SvgpModel(const SvgpModel& o)
+    : latents_(o.latents_), lik_(o.lik_ ? o.lik_->clone() : nullptr), jitter_(o.jitter_) {}
+
+SvgpModel& SvgpModel::operator=(const SvgpModel& o) {
+  if (this != &o) {
+    latents_ = o.latents_;
+    lik_ = o.lik_ ? o.lik_->clone() : nullptr;
+    jitter_ = o.jitter_;
+  }
+  return *this;
+}
+
+namespace {
+
+struct LatentCache {
+  Eigen::LLT<Eigen::MatrixXd> LK;
+  Eigen::MatrixXd Kinv, Knu, A, AL;
+  Eigen::VectorXd kdiag;
+};
+
+void computeMoments(const LatentGp& lat, double jitter, const Eigen::MatrixXd& X, LatentCache& c,
+                    LatentMoments& q, bool keep_kinv) {
+  const Eigen::Index m = lat.Z.rows();
+  Eigen::MatrixXd Kuu = lat.kernel->K(lat.Z, lat.Z);
+  Kuu.diagonal().array() += jitter;
+  c.LK.compute(Kuu);
+  if (c.LK.info() != Eigen::Success) throw std::runtime_error("SVGP: K_uu is not positive definite");
+  if (keep_kinv) c.Kinv = c.LK.solve(Eigen::MatrixXd::Identity(m, m));
+  c.Knu = lat.kernel->K(X, lat.Z);
+  c.kdiag = lat.kernel->Kdiag(X);
+  // A = K_nu K_uu⁻¹ (eq. 4.13: m = A μ; eq. 4.14: v = k_nn - diag(A K_un) + diag(A S Aᵀ)).
+  c.A = c.LK.solve(c.Knu.transpose()).transpose();
+  c.AL.noalias() = c.A * lat.L.triangularView<Eigen::Lower>();
+  q.m.noalias() = c.A * lat.mu;
+  q.v = c.kdiag - (c.A.array() * c.Knu.array()).rowwise().sum().matrix() +
+        c.AL.array().square().rowwise().sum().matrix();
+  q.v = q.v.cwiseMax(1e-12);
+}
+
+}  // namespace
+
+ElboEvaluation SvgpModel::evaluate(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, double scale,
+                                   bool hyper_grad) const {
+  const int nl = static_cast<int>(latents_.size());
+  std::vector<LatentCache> cache(static_cast<std::size_t>(nl));
+  std::vector<LatentMoments> q(static_cast<std::size_t>(nl));
+  for (int k = 0; k < nl; ++k) computeMoments(latents_[k], jitter_, X, cache[k], q[k], true);
+  std::vector<LatentMoments> dq;
+  ElboEvaluation ev;
+  ev.ell = lik_->variationalExpectations(y, q, &dq);
+  ev.latent.resize(static_cast<std::size_t>(nl));
+  if (hyper_grad) ev.hyper_grad = Eigen::VectorXd::Zero(numHyperParams());
+  int offset = 0;
+  for (int k = 0; k < nl; ++k) {
+    const LatentGp& lat = latents_[k];
+    LatentCache& c = cache[k];
+    auto& pl = ev.latent[k];
+    const Eigen::Index m = lat.Z.rows();
+    pl.b.noalias() = c.A.transpose() * dq[k].m;
+    pl.Q.noalias() = c.A.transpose() * (dq[k].v.asDiagonal() * c.A);
+    const Eigen::VectorXd beta = c.Kinv * lat.mu;
+    const Eigen::MatrixXd S = lat.L.triangularView<Eigen::Lower>() * lat.L.transpose();
+    const Eigen::MatrixXd T = c.Kinv * S;  // K⁻¹ S
+    // KL(q(u) || p(u)) = ½[tr(K⁻¹S) + μᵀK⁻¹μ - m + log|K| - log|S|] (eq. 4.12).
+    double logdetK = 2.0 * Eigen::MatrixXd(c.LK.matrixLLT()).diagonal().array().log().sum();
+    double logdetS = 2.0 * lat.L.diagonal().array().abs().log().sum();
+    ev.kl += 0.5 * (T.trace() + lat.mu.dot(beta) - static_cast<double>(m) + logdetK - logdetS);
+    pl.grad_mu = scale * pl.b - beta;
+    pl.Kinv = std::move(c.Kinv);
+    if (hyper_grad) {
+      // ∂/∂K_nu, ∂/∂diag K_nn, ∂/∂K_uu of scale * E - KL, chained into the kernel parameters.
+      Eigen::MatrixXd Gnu = dq[k].m * beta.transpose();
+      Eigen::MatrixXd ASK = c.A * T.transpose();  // A S K⁻¹
+      ASK -= c.A;
+      Gnu += 2.0 * (dq[k].v.asDiagonal() * ASK);
+      Gnu *= scale;
+      const Eigen::MatrixXd TQ = T * pl.Q;
+      Eigen::MatrixXd Guu = scale * (pl.Q - TQ - TQ.transpose() - pl.b * beta.transpose());
+      Guu -= 0.5 * (pl.Kinv - T * pl.Kinv - beta * beta.transpose());
+      const int np = lat.kernel->numParams();
+      ev.hyper_grad.segment(offset, np) = lat.kernel->gradK(X, lat.Z, Gnu) +
+                                          lat.kernel->gradKdiag(X, scale * dq[k].v) +
+                                          lat.kernel->gradK(lat.Z, lat.Z, Guu);
+      offset += np;
+    }
+  }
+  ev.elbo = scale * ev.ell - ev.kl;
+  return ev;
+}
+
+double SvgpModel::naturalGradientStep(int k, const ElboEvaluation& ev, double scale, double gamma) {
+  LatentGp& lat = latents_[k];
+  const auto& pl = ev.latent[k];
+  const Eigen::Index m = lat.Z.rows();
+  // Natural parameters θ1 = S⁻¹μ, θ2 = -½S⁻¹; the natural gradient equals the gradient w.r.t. the expectation
+  // parameters, giving Λ' = (1-γ)Λ + γ(K⁻¹ - 2 s Q), θ1' = (1-γ)θ1 + γ s (b - 2Qμ) (Salimbeni et al. 2018).
+  const Eigen::MatrixXd Linv = lat.L.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(m, m));
+  const Eigen::MatrixXd Lambda = Linv.transpose() * Linv;
+  const Eigen::VectorXd theta1 = Lambda * lat.mu;
+  const Eigen::MatrixXd target = pl.Kinv - 2.0 * scale * pl.Q;
+  const Eigen::VectorXd target1 = scale * (pl.b - 2.0 * pl.Q * lat.mu);
+  for (int attempt = 0; attempt < 12; ++attempt, gamma *= 0.5) {
+    Eigen::MatrixXd Ln = (1.0 - gamma) * Lambda + gamma * target;
+    Ln = 0.5 * (Ln + Ln.transpose()).eval();
+    const Eigen::VectorXd t1 = (1.0 - gamma) * theta1 + gamma * target1;
+    // Lower-triangular root of S' = Λ'⁻¹ from the Cholesky factor of the reversed precision.
+    Eigen::LLT<Eigen::MatrixXd> llt(Ln.reverse());
+    if (llt.info() != Eigen::Success) continue;
+    const Eigen::MatrixXd M = llt.matrixL();
+    const Eigen::MatrixXd Minv = M.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(m, m));
+    Eigen::MatrixXd Lnew = Minv.transpose().reverse();
+    Lnew.triangularView<Eigen::StrictlyUpper>().setZero();
+    const Eigen::VectorXd mu_new = Lnew * (Lnew.transpose() * t1);
+    if (!Lnew.allFinite() || !mu_new.allFinite()) continue;
+    lat.L = std::move(Lnew);
+    lat.mu = mu_new;
+    return gamma;
+  }
+  return 0.0;
+}
+
+LatentMoments SvgpModel::latentMoments(int k, const Eigen::MatrixXd& X) const {
+  LatentMoments out{Eigen::VectorXd(X.rows()), Eigen::VectorXd(X.rows())};
+  const Eigen::Index chunk = 4000;
+  for (Eigen::Index s = 0; s < X.rows(); s += chunk) {
+    const Eigen::Index len = std::min(chunk, X.rows() - s);
+    LatentCache c;
+    LatentMoments q;
+    computeMoments(latents_[k], jitter_, X.middleRows(s, len), c, q, false);
+    out.m.segment(s, len) = q.m;
+    out.v.segment(s, len) = q.v;
+  }
+  return out;
+}
+
+void SvgpModel::predictY(const Eigen::MatrixXd& X, Eigen::VectorXd& mean, Eigen::VectorXd& var) const {
+  std::vector<LatentMoments> q;
+  for (int k = 0; k < static_cast<int>(latents_.size()); ++k) q.push_back(latentMoments(k, X));
+  lik_->predict(q, mean, var);
+}
+
+Eigen::VectorXd SvgpModel::logPredictiveDensity(const Eigen::MatrixXd& X, const Eigen::VectorXd& y) const {
+  std::vector<LatentMoments> q;
+  for (int k = 0; k < static_cast<int>(latents_.size()); ++k) q.push_back(latentMoments(k, X));
+  return lik_->logPredictiveDensity(y, q);
+}
+
+int SvgpModel::numHyperParams() const {
+  int n = 0;
+  for (const auto& l : latents_) n += l.kernel->numParams();
+  return n;
+}
+
+Eigen::VectorXd SvgpModel::hyperParams() const {
+  Eigen::VectorXd p(numHyperParams());
+  int o = 0;
+  for (const auto& l : latents_) {
+    p.segment(o, l.kernel->numParams()) = l.kernel->params();
+    o += l.kernel->numParams();
+  }
+  return p;
+}
+
+void SvgpModel::setHyperParams(const Eigen::VectorXd& p) {
+  int o = 0;
+  for (auto& l : latents_) {
+    l.kernel->setParams(p.segment(o, l.kernel->numParams()));
+    o += l.kernel->numParams();
+  }
+}
+
+Eigen::VectorXd SvgpModel::hyperLowerBounds() const {
+  Eigen::VectorXd p(numHyperParams());
+  int o = 0;
+  for (const auto& l : latents_) {
+    p.segment(o, l.kernel->numParams()) = l.kernel->lowerBounds();
+    o += l.kernel->numParams();
+  }
+  return p;
+}
+
+Eigen::VectorXd SvgpModel::hyperUpperBounds() const {
+  Eigen::VectorXd p(numHyperParams());
+  int o = 0;
+  for (const auto& l : latents_) {
+    p.segment(o, l.kernel->numParams()) = l.kernel->upperBounds();
+    o += l.kernel->numParams();
+  }
+  return p;
+}
+
+// ----------------------------------------------------------------------------------------------- training
+
+TrainReport trainSvgp(SvgpModel& model, const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
+                      const TrainConfig& cfg) {
+  TrainReport rep;
+  const Eigen::Index n = X.rows();
+  if (n == 0) throw std::invalid_argument("trainSvgp: empty training set");
+  if (y.size() != n) throw std::invalid_argument("trainSvgp: X and y sizes differ");
+  if (!X.allFinite() || !y.allFinite()) throw std::invalid_argument("trainSvgp: NaN or Inf in training data");
+  const auto t_start = std::chrono::steady_clock::now();
+  auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  };
+  const Eigen::Index B = std::min<Eigen::Index>(std::max(1, cfg.batch_size), n);
+  std::mt19937_64 rng(cfg.seed);
+  std::vector<Eigen::Index> perm(static_cast<std::size_t>(n));
+  std::iota(perm.begin(), perm.end(), 0);
+  std::size_t pos = perm.size();
+
+  // Adam state (Kingma & Ba 2014) on the unconstrained hyperparameters; maximizes the ELBO.
+  const int np = model.numHyperParams();
+  Eigen::VectorXd am = Eigen::VectorXd::Zero(np), av = Eigen::VectorXd::Zero(np);
+  const Eigen::VectorXd lo = model.hyperLowerBounds(), hi = model.hyperUpperBounds();
+  int adam_t = 0;
+  auto schedule = [&](double a, double b, int it) {
+    if (cfg.decay_steps <= 0 || it >= cfg.decay_steps) return b;
+    return a + (b - a) * static_cast<double>(it) / cfg.decay_steps;  // linear decay (§4.2.5)
+  };
+
+  SvgpModel last_good = model;
+  double epoch_sum = 0;
+  Eigen::Index epoch_count = 0;
+  const Eigen::Index per_epoch = (n + B - 1) / B;
+  Eigen::MatrixXd Xb(B, X.cols());
+  Eigen::VectorXd yb(B);
+  for (int it = 0; it < cfg.max_iterations; ++it) {
+    if (pos + static_cast<std::size_t>(B) > perm.size()) {
+      std::shuffle(perm.begin(), perm.end(), rng);
+      pos = 0;
+    }
+    for (Eigen::Index i = 0; i < B; ++i) {
+      Xb.row(i) = X.row(perm[pos + static_cast<std::size_t>(i)]);
+      yb[i] = y[perm[pos + static_cast<std::size_t>(i)]];
+    }
+    pos += static_cast<std::size_t>(B);
+    const double scale = static_cast<double>(n) / static_cast<double>(B);
+    const bool hyper = cfg.train_hyper && it >= cfg.hyper_warmup && np > 0;
+    ElboEvaluation ev;
+    try {
+      ev = model.evaluate(Xb, yb, scale, hyper);
+    } catch (const std::exception& e) {
+      model = last_good;
+      rep.diverged = true;
+      rep.message = std::string("numerical failure (") + e.what() + "); kept the last good model";
+      break;
+    }
+    if (!std::isfinite(ev.elbo) || (hyper && !ev.hyper_grad.allFinite())) {
+      model = last_good;
+      rep.diverged = true;
+      rep.message = "ELBO became NaN/Inf at iteration " + std::to_string(it) + "; kept the last good model";
+      break;
+    }
+    last_good = model;
+    // Natural-gradient step on q(u_f), q(u_g) ...
+    const double gamma = schedule(cfg.natgrad_gamma_start, cfg.natgrad_gamma_end, it);
+    for (int k = 0; k < static_cast<int>(model.latents().size()); ++k) model.naturalGradientStep(k, ev, scale, gamma);
+    // ... then Adam on the kernel hyperparameters (§4.2.5).
+    if (hyper) {
+      ++adam_t;
+      const double lr = schedule(cfg.adam_lr_start, cfg.adam_lr_end, it - cfg.hyper_warmup);
+      const Eigen::VectorXd g = -ev.hyper_grad / static_cast<double>(n);  // per-point loss gradient
+      am = 0.9 * am + 0.1 * g;
+      av = 0.999 * av + 0.001 * g.cwiseProduct(g);
+      const double c1 = 1.0 - std::pow(0.9, adam_t), c2 = 1.0 - std::pow(0.999, adam_t);
+      Eigen::VectorXd p = model.hyperParams();
+      p.array() -= lr * (am.array() / c1) / ((av.array() / c2).sqrt() + 1e-8);
+      model.setHyperParams(p.cwiseMax(lo).cwiseMin(hi));
+    }
+    ++rep.iterations;
+    const double per_point = ev.elbo / static_cast<double>(n);
+    if (cfg.progress) cfg.progress(it, per_point, elapsed());
+    epoch_sum += per_point;
+    ++epoch_count;
+    if (epoch_count == per_epoch) {
+      const double mean = epoch_sum / static_cast<double>(epoch_count);
+      rep.epoch_elbo.push_back(mean);
+      ++rep.epochs;
+      epoch_sum = 0;
+      epoch_count = 0;
+      const std::size_t e = rep.epoch_elbo.size();
+      if (static_cast<int>(e) >= cfg.min_epochs && e >= 2) {
+        const double prev = rep.epoch_elbo[e - 2];
+        if (std::abs(mean - prev) <= cfg.tolerance * std::max(1e-12, std::abs(prev))) {
+          rep.converged = true;
+          rep.message = "converged: epoch ELBO change below tolerance";
+          break;
+        }
+      }
+    }
+    if (elapsed() > cfg.max_seconds) {
+      rep.message = "stopped at the time limit";
+      break;
+    }
+  }
+  if (rep.message.empty()) rep.message = "stopped at the iteration limit";
+  rep.final_elbo = rep.epoch_elbo.empty() ? (epoch_count ? epoch_sum / epoch_count : 0.0) : rep.epoch_elbo.back();
+  rep.seconds = elapsed();
+  return rep;
+}
+
+}  // namespace cairn::copa_map
