@@ -1,0 +1,57 @@
+// Scan -> leg detections (segmentation + features + classifier) -> person detections (leg pairing).
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "cairn/people_tracking/classifier.hpp"
+#include "cairn/people_tracking/segmentation.hpp"
+
+namespace cairn::people_tracking {
+
+struct LegDetection {
+  Eigen::Vector2d position;  // sensor frame, estimated leg centre
+  double confidence = 0.0;   // classifier score
+  double width = 0.0;        // cluster width (m)
+};
+
+// A person hypothesis in the frame of its source (sensor frame from the detector; odom/map after transform).
+struct PersonDetection {
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity() * 0.01;
+  double confidence = 0.0;
+  double leg_separation = 0.0;  // m, 0 when only one leg / merged legs were seen
+  int legs = 0;                 // 2: paired legs, 1: single cluster
+  int source = 0;               // detection source id (fusion)
+};
+
+struct DetectorParams {
+  SegmentationParams segmentation{};
+  double min_leg_confidence = 0.5;     // classifier score to accept a cluster as a leg
+  double max_range = 10.0;             // m, clusters beyond are ignored
+  double max_leg_width = 0.45;         // m, wider clusters are not legs (also rejects most walls cheaply)
+  double leg_center_offset = 0.04;     // m, leg centre lies behind the visible surface along the beam
+  double max_leg_pair_distance = 0.6;  // m, two legs closer than this form a person
+  double single_leg_min_confidence = 0.6;  // an unpaired leg cluster needs this score to become a person
+  double sigma_pair = 0.06;            // m, position std of a paired-leg person (both axes)
+  double sigma_single = 0.15;          // m, position std of a single-cluster person (other leg unseen/merged)
+};
+
+class PersonDetector {
+ public:
+  PersonDetector(std::shared_ptr<const LegClassifier> classifier, DetectorParams params = {});
+
+  // Throws InputError on malformed scans. Optional outputs: leg detections.
+  std::vector<PersonDetection> detect(const LaserScan& scan, std::vector<LegDetection>* legs = nullptr) const;
+  [[nodiscard]] const DetectorParams& params() const { return params_; }
+
+ private:
+  std::shared_ptr<const LegClassifier> classifier_;
+  DetectorParams params_;
+};
+
+// Greedy closest-first pairing of legs into persons (each leg used once); exposed for tests and other sources.
+std::vector<PersonDetection> pairLegs(const std::vector<LegDetection>& legs, const DetectorParams& params);
+
+}  // namespace cairn::people_tracking

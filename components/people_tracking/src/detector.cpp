@@ -1,0 +1,69 @@
+#include "cairn/people_tracking/detector.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+
+namespace cairn::people_tracking {
+
+PersonDetector::PersonDetector(std::shared_ptr<const LegClassifier> classifier, DetectorParams params)
+    : classifier_(std::move(classifier)), params_(params) {
+  if (!classifier_) throw InputError("PersonDetector needs a classifier");
+}
+
+std::vector<PersonDetection> PersonDetector::detect(const LaserScan& scan, std::vector<LegDetection>* legs_out) const {
+  std::vector<LegDetection> legs;
+  for (const Cluster& c : segmentScan(scan, params_.segmentation)) {
+    const Eigen::Vector2d centroid = c.centroid();
+    const double range = centroid.norm();
+    if (range > params_.max_range) continue;
+    const double width = (c.points.front() - c.points.back()).norm();
+    if (width > params_.max_leg_width) continue;
+    const double conf = classifier_->score(computeFeatures(c));
+    if (conf < params_.min_leg_confidence) continue;
+    const Eigen::Vector2d center = range > 1e-6 ? Eigen::Vector2d(centroid * (1.0 + params_.leg_center_offset / range))
+                                                 : centroid;
+    legs.push_back({center, conf, width});
+  }
+  if (legs_out) *legs_out = legs;
+  return pairLegs(legs, params_);
+}
+
+std::vector<PersonDetection> pairLegs(const std::vector<LegDetection>& legs, const DetectorParams& params) {
+  std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
+  for (std::size_t i = 0; i < legs.size(); ++i)
+    for (std::size_t j = i + 1; j < legs.size(); ++j) {
+      const double d = (legs[i].position - legs[j].position).norm();
+      if (d <= params.max_leg_pair_distance) pairs.emplace_back(d, i, j);
+    }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<bool> used(legs.size(), false);
+  std::vector<PersonDetection> out;
+  for (const auto& [d, i, j] : pairs) {
+    if (used[i] || used[j]) continue;
+    used[i] = used[j] = true;
+    PersonDetection p;
+    p.position = 0.5 * (legs[i].position + legs[j].position);
+    // The body centre lies between the legs; the along-pair direction is less certain by the half separation
+    // (uniform over the spacing: variance (d/2)^2 / 3).
+    const Eigen::Vector2d u = (legs[j].position - legs[i].position) / std::max(d, 1e-9);
+    const double s2 = params.sigma_pair * params.sigma_pair;
+    p.covariance = s2 * Eigen::Matrix2d::Identity() + (d * d / 12.0) * u * u.transpose();
+    p.confidence = 0.5 * (legs[i].confidence + legs[j].confidence);
+    p.leg_separation = d;
+    p.legs = 2;
+    out.push_back(p);
+  }
+  for (std::size_t i = 0; i < legs.size(); ++i) {
+    if (used[i] || legs[i].confidence < params.single_leg_min_confidence) continue;
+    PersonDetection p;
+    p.position = legs[i].position;
+    p.covariance = params.sigma_single * params.sigma_single * Eigen::Matrix2d::Identity();
+    p.confidence = legs[i].confidence;
+    p.legs = 1;
+    out.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace cairn::people_tracking
