@@ -10,6 +10,8 @@ namespace {
 
 constexpr double kSqrt5 = 2.23606797749978969641;
 constexpr double kPi = 3.14159265358979323846;
+// Below this many kernel entries threads cost more than they save (busy CPUs make spinning threads slow).
+constexpr Eigen::Index kParallelMin = 40000;
 
 // 1D Matérn-5/2 with unit variance (eq. 4.9) and its derivative w.r.t. log l.
 inline void matern52(double d, double l, double& k, double& dk_dlogl) {
@@ -94,7 +96,7 @@ Eigen::VectorXd SpatioTemporalKernel::upperBounds() const {
 Eigen::MatrixXd SpatioTemporalKernel::K(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2) const {
   const Eigen::Index n1 = X1.rows(), n2 = X2.rows();
   Eigen::MatrixXd out(n1, n2);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n1 * n2 > kParallelMin)
   for (Eigen::Index j = 0; j < n2; ++j) {
     for (Eigen::Index i = 0; i < n1; ++i) {
       double k1, k2, tmp;
@@ -124,7 +126,7 @@ Eigen::VectorXd SpatioTemporalKernel::gradK(const Eigen::MatrixXd& X1, const Eig
   const Eigen::Index n1 = X1.rows(), n2 = X2.rows();
   std::vector<Eigen::VectorXd> parts(static_cast<std::size_t>(omp_get_max_threads()),
                                      Eigen::VectorXd::Zero(np));
-#pragma omp parallel
+#pragma omp parallel if (n1 * n2 > kParallelMin)
   {
     Eigen::VectorXd& acc = parts[static_cast<std::size_t>(omp_get_thread_num())];
     std::vector<double> pc(comps_.size()), sc(comps_.size()), arg(comps_.size());
@@ -205,7 +207,7 @@ Eigen::MatrixXd RbfKernel::K(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X
   const Eigen::Index n1 = X1.rows(), n2 = X2.rows();
   Eigen::MatrixXd out(n1, n2);
   const Eigen::Vector3d il = ls_.cwiseInverse();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n1 * n2 > kParallelMin)
   for (Eigen::Index j = 0; j < n2; ++j)
     for (Eigen::Index i = 0; i < n1; ++i) {
       double q = 0.0;
@@ -227,7 +229,7 @@ Eigen::VectorXd RbfKernel::gradK(const Eigen::MatrixXd& X1, const Eigen::MatrixX
   const Eigen::Index n1 = X1.rows(), n2 = X2.rows();
   const Eigen::Vector3d il = ls_.cwiseInverse();
   std::vector<Eigen::VectorXd> parts(static_cast<std::size_t>(omp_get_max_threads()), Eigen::VectorXd::Zero(4));
-#pragma omp parallel
+#pragma omp parallel if (n1 * n2 > kParallelMin)
   {
     Eigen::VectorXd& acc = parts[static_cast<std::size_t>(omp_get_thread_num())];
 #pragma omp for schedule(static)

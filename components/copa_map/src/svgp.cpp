@@ -1,6 +1,8 @@
 #include "cairn/copa_map/svgp.hpp"
 
 #include <algorithm>
+#include <omp.h>
+
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -12,6 +14,33 @@ namespace {
 
 constexpr double kLog2Pi = 1.83787706640934548356;
 constexpr double kSqrtPi = 1.77245385090551602730;
+
+// Small problems run on one thread: on a loaded 2-core machine every OpenMP barrier can cost a scheduler time
+// slice, which dwarfs the work of small matrix products.
+class ThreadLimit {
+ public:
+  explicit ThreadLimit(double work) : saved_(omp_get_max_threads()), eigen_saved_(Eigen::nbThreads()) {
+    if (work < 2e7) {
+      omp_set_num_threads(1);
+      Eigen::setNbThreads(1);
+    }
+  }
+  ~ThreadLimit() {
+    omp_set_num_threads(saved_);
+    Eigen::setNbThreads(eigen_saved_);
+  }
+  ThreadLimit(const ThreadLimit&) = delete;
+  ThreadLimit& operator=(const ThreadLimit&) = delete;
+
+ private:
+  int saved_, eigen_saved_;
+};
+
+double maxInducing(const std::vector<LatentGp>& l) {
+  double m = 0;
+  for (const auto& x : l) m = std::max(m, static_cast<double>(x.Z.rows()));
+  return m;
+}
 
 inline double softplus(double x) { return x > 30.0 ? x : std::log1p(std::exp(x)); }
 inline double logistic(double x) {
@@ -53,7 +82,7 @@ double HeteroscedasticGaussianLikelihood::variationalExpectations(const Eigen::V
   }
   const Eigen::Index K = nodes_.size();
   double total = 0.0;
-#pragma omp parallel for reduction(+ : total) schedule(static)
+#pragma omp parallel for reduction(+ : total) schedule(static) if (n > 4000)
   for (Eigen::Index i = 0; i < n; ++i) {
     const double r = (y[i] - f.m[i]) * (y[i] - f.m[i]) + f.v[i];
     const double sd = std::sqrt(2.0 * std::max(g.v[i], 0.0));
@@ -337,6 +366,8 @@ double SvgpModel::naturalGradientStep(int k, const ElboEvaluation& ev, double sc
 
 LatentMoments SvgpModel::latentMoments(int k, const Eigen::MatrixXd& X) const {
   LatentMoments out{Eigen::VectorXd(X.rows()), Eigen::VectorXd(X.rows())};
+  const double m = static_cast<double>(latents_[k].Z.rows());
+  ThreadLimit threads(static_cast<double>(X.rows()) * m * m + m * m * m);
   const Eigen::Index chunk = 4000;
   for (Eigen::Index s = 0; s < X.rows(); s += chunk) {
     const Eigen::Index len = std::min(chunk, X.rows() - s);
@@ -419,6 +450,8 @@ TrainReport trainSvgp(SvgpModel& model, const Eigen::MatrixXd& X, const Eigen::V
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   };
   const Eigen::Index B = std::min<Eigen::Index>(std::max(1, cfg.batch_size), n);
+  const double mmax = maxInducing(model.latents());
+  ThreadLimit threads(static_cast<double>(B) * mmax * mmax + mmax * mmax * mmax);
   std::mt19937_64 rng(cfg.seed);
   std::vector<Eigen::Index> perm(static_cast<std::size_t>(n));
   std::iota(perm.begin(), perm.end(), 0);
