@@ -1,0 +1,73 @@
+// The DDS leg of publishers, subscriptions and services: type-erased over msgs::TypeSupport.
+#ifndef CAIRN_DDS_HPP
+#define CAIRN_DDS_HPP
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <string>
+
+#include "cairn/message_info.hpp"
+#include "cairn/qos.hpp"
+
+namespace cairn {
+
+class Context;
+namespace msgs {
+struct TypeSupport;
+}
+
+/// Endpoint options beyond QoS.
+struct DdsEndpointOptions {
+  std::string node;          ///< fully qualified node name, advertised in the endpoint's USER_DATA
+  bool ignore_local = true;  ///< ignore endpoints of this process (they are served intra-process)
+};
+
+class DdsWriter {
+ public:
+  DdsWriter(Context& ctx, const std::string& dds_topic, const msgs::TypeSupport& ts, const QoS& qos,
+            const DdsEndpointOptions& opts);
+  ~DdsWriter();
+  DdsWriter(const DdsWriter&) = delete;
+  DdsWriter& operator=(const DdsWriter&) = delete;
+  /// Serializes `cpp` (a C++ message of the writer's type) and writes it. Throws on DDS errors.
+  void write(const void* cpp, int64_t source_timestamp_ns);
+  /// Number of matched readers (in other processes when ignore_local).
+  int matched() const;
+  Gid guid() const { return guid_; }
+  int32_t entity() const { return writer_; }
+
+ private:
+  const msgs::TypeSupport& ts_;
+  int32_t writer_ = 0;
+  Gid guid_{};
+};
+
+class DdsReader {
+ public:
+  /// `on_data` runs on a Cyclone thread whenever data arrives; keep it short (schedule work).
+  DdsReader(Context& ctx, const std::string& dds_topic, const msgs::TypeSupport& ts, const QoS& qos,
+            const DdsEndpointOptions& opts, std::function<void()> on_data);
+  ~DdsReader();
+  DdsReader(const DdsReader&) = delete;
+  DdsReader& operator=(const DdsReader&) = delete;
+  /// Takes the next valid sample into `cpp_out` (a C++ message of the reader's type); false if none.
+  bool take(void* cpp_out, MessageInfo& info);
+  int matched() const;
+  int32_t entity() const { return reader_; }
+
+ private:
+  Gid publisher_gid(uint64_t publication_handle);
+  const msgs::TypeSupport& ts_;
+  std::function<void()> on_data_;
+  int32_t reader_ = 0;
+  std::map<uint64_t, std::pair<Gid, uint64_t>> pubs_;  // publication handle -> (guid, reception count)
+};
+
+/// "rt/<name>" for a resolved topic name "/<name>" (ROS 2 convention).
+std::string dds_topic_name(const std::string& resolved);
+
+}  // namespace cairn
+
+#endif  // CAIRN_DDS_HPP

@@ -1,0 +1,81 @@
+#ifndef CAIRN_PUBLISHER_HPP
+#define CAIRN_PUBLISHER_HPP
+
+#include <atomic>
+#include <memory>
+#include <string>
+
+#include "cairn/clock.hpp"
+#include "cairn/dds.hpp"
+#include "cairn/intra_process.hpp"
+#include "cairn/logging.hpp"
+#include "cairn/msgs/type_support.hpp"
+
+namespace cairn {
+
+class PublisherBase {
+ public:
+  virtual ~PublisherBase() = default;
+  const std::string& topic() const { return topic_; }
+  const QoS& qos() const { return qos_; }
+
+ protected:
+  std::string topic_;
+  QoS qos_;
+};
+
+/// Publishes T on a topic: intra-process subscriptions get the object itself (see intra_process.hpp),
+/// subscriptions in other processes get it over DDS (topic rt/<name>, type pkg::msg::dds_::T_).
+template <class T>
+class Publisher : public PublisherBase {
+ public:
+  /// `channel` null: no intra-process delivery; `dds` null: no DDS leg (dry run or intra-only).
+  Publisher(std::string topic, QoS qos, std::shared_ptr<Channel<T>> channel, std::unique_ptr<DdsWriter> dds, Gid gid,
+            std::shared_ptr<Clock> clock, Logger logger)
+      : channel_(std::move(channel)), dds_(std::move(dds)), gid_(gid), clock_(std::move(clock)),
+        logger_(std::move(logger)) {
+    topic_ = std::move(topic);
+    qos_ = qos;
+    latch_ = qos_.durability == QoS::Durability::TransientLocal ? std::max(qos_.depth, 1) : 0;
+  }
+
+  /// Hands the message over. Same-process owners receive this very object.
+  void publish(std::unique_ptr<T> msg) {
+    MessageInfo info;
+    info.source_timestamp_ns = clock_->now().ns;
+    info.publisher_gid = gid_;
+    info.sequence_number = ++seq_;
+    info.from_intra_process = true;
+    // The DDS leg serializes first, while the object is still ours; DDS readers of this process are
+    // ignored (ignore_local), so they never see it twice. Transient-local writers always write so that
+    // late joiners in other processes get the history.
+    if (dds_ && (latch_ > 0 || dds_->matched() > 0)) {
+      try {
+        dds_->write(msg.get(), info.source_timestamp_ns);
+      } catch (const std::exception& e) {
+        CAIRN_ERROR(logger_, "publish on " << topic_ << ": " << e.what());
+      }
+    }
+    if (channel_) channel_->publish(std::move(msg), info, latch_);
+  }
+  /// Publishes a copy of `msg` (one copy; prefer the unique_ptr overload).
+  void publish(const T& msg) { publish(std::make_unique<T>(msg)); }
+
+  std::size_t intra_process_subscription_count() const { return channel_ ? channel_->count() : 0; }
+  std::size_t inter_process_subscription_count() const { return dds_ ? static_cast<std::size_t>(dds_->matched()) : 0; }
+  std::size_t subscription_count() const { return intra_process_subscription_count() + inter_process_subscription_count(); }
+  Gid gid() const { return gid_; }
+
+ private:
+  std::shared_ptr<Channel<T>> channel_;
+  std::unique_ptr<DdsWriter> dds_;
+  Gid gid_;
+  std::shared_ptr<Clock> clock_;
+  Logger logger_;
+  std::atomic<uint64_t> seq_{0};
+  int latch_ = 0;
+};
+
+}  // namespace cairn
+
+#endif  // CAIRN_PUBLISHER_HPP

@@ -1,0 +1,211 @@
+// Services: request/reply over DDS topics rq/<name>Request and rr/<name>Reply (ROS 2 naming). Every
+// request and reply type starts with cairn_interfaces/msg/RequestHeader (client id, sequence number).
+//
+// Lost replies are the classic failure of request/reply over DDS (rmw_cyclonedds#74, #187): request and
+// reply endpoints are discovered independently. Here a client sends only once both its request writer
+// and its reply reader are matched, and a server writes a reply only once its reply writer has matched
+// that very client's reply reader (it waits a bounded time for discovery otherwise).
+#ifndef CAIRN_SERVICE_HPP
+#define CAIRN_SERVICE_HPP
+
+#include <chrono>
+#include <functional>
+#include <future>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <thread>
+
+#include "cairn/context.hpp"
+#include "cairn/dds.hpp"
+#include "cairn/executor.hpp"
+#include "cairn/logging.hpp"
+#include "cairn/msgs/type_support.hpp"
+
+namespace cairn {
+
+namespace detail {
+/// 64-bit client id derived from the client's reply-reader GUID, so a server can tell whether its reply
+/// writer has matched that reader.
+uint64_t client_id_from_gid(const Gid& g);
+Gid reader_gid(int32_t reader);
+/// True once `writer` is matched with a reader whose client id is `client_id`.
+bool writer_matches_client(int32_t writer, uint64_t client_id);
+std::string request_topic(const std::string& service);
+std::string reply_topic(const std::string& service);
+}  // namespace detail
+
+class ServiceBase : public Executable {
+ public:
+  using Executable::Executable;
+  virtual void shutdown() = 0;
+  const std::string& name() const { return name_; }
+
+ protected:
+  std::string name_;
+};
+
+template <class Req, class Resp>
+class Service : public ServiceBase {
+ public:
+  /// Replies later by calling `reply` (possibly from another thread), e.g. after a slow operation.
+  using DeferredCallback = std::function<void(const Req&, std::function<void(Resp)> reply)>;
+
+  Service(std::shared_ptr<CallbackGroup> group, Executor* exec, std::string name, DeferredCallback cb, Logger logger,
+          std::chrono::milliseconds reply_match_timeout = std::chrono::milliseconds(2000))
+      : ServiceBase(std::move(group)), exec_(exec), cb_(std::move(cb)), logger_(std::move(logger)),
+        reply_match_timeout_(reply_match_timeout) {
+    name_ = std::move(name);
+  }
+
+  void connect(Context& ctx, const std::string& node) {
+    DdsEndpointOptions opts{node, false};
+    std::weak_ptr<Executable> weak = shared_from_this();
+    Executor* exec = exec_;
+    QoS q = QoS::services();
+    q.keep_all();
+    writer_ = std::make_shared<DdsWriter>(ctx, detail::reply_topic(name_), msgs::type_support<Resp>(), q, opts);
+    reader_ = std::make_unique<DdsReader>(ctx, detail::request_topic(name_), msgs::type_support<Req>(), q, opts,
+                                          [weak, exec] {
+                                            if (auto s = weak.lock()) exec->schedule(s);
+                                          });
+  }
+
+  void shutdown() override {
+    disable();
+    reader_.reset();
+    writer_.reset();
+  }
+
+ protected:
+  void execute() override {
+    for (;;) {
+      Req req;
+      MessageInfo info;
+      if (!reader_ || !reader_->take(&req, info)) return;
+      const auto header = req.request_header;
+      std::weak_ptr<DdsWriter> weak_writer = writer_;
+      auto reply = [weak_writer, header, timeout = reply_match_timeout_, logger = logger_, name = name_](Resp resp) {
+        auto w = weak_writer.lock();
+        if (!w) return;
+        resp.request_header = header;
+        const auto deadline = std::chrono::steady_clock::now() + timeout;
+        while (!detail::writer_matches_client(w->entity(), header.client_guid)) {
+          if (std::chrono::steady_clock::now() > deadline) {
+            CAIRN_WARN(logger, "service " << name << ": client's reply reader not discovered; replying anyway");
+            break;
+          }
+          std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        }
+        try {
+          w->write(&resp, 0);
+        } catch (const std::exception& e) {
+          CAIRN_ERROR(logger, "service " << name << ": cannot send reply: " << e.what());
+        }
+      };
+      try {
+        cb_(req, reply);
+      } catch (const std::exception& e) {
+        CAIRN_ERROR(logger_, "service " << name_ << " callback threw: " << e.what());
+      }
+    }
+  }
+
+ private:
+  Executor* exec_;
+  DeferredCallback cb_;
+  Logger logger_;
+  std::chrono::milliseconds reply_match_timeout_;
+  std::shared_ptr<DdsWriter> writer_;
+  std::unique_ptr<DdsReader> reader_;
+};
+
+/// A service client. Thread-safe; replies are handled on a DDS thread, so a synchronous call() from inside
+/// an executor callback does not deadlock.
+template <class Req, class Resp>
+class Client {
+ public:
+  Client(Context& ctx, std::string name, const std::string& node) : name_(std::move(name)) {
+    DdsEndpointOptions opts{node, false};
+    QoS q = QoS::services();
+    q.keep_all();
+    writer_ = std::make_unique<DdsWriter>(ctx, detail::request_topic(name_), msgs::type_support<Req>(), q, opts);
+    reader_ = std::make_unique<DdsReader>(ctx, detail::reply_topic(name_), msgs::type_support<Resp>(), q, opts,
+                                          [this] { on_reply(); });
+    client_id_ = detail::client_id_from_gid(detail::reader_gid(reader_->entity()));
+  }
+  ~Client() { reader_.reset(); }
+
+  const std::string& name() const { return name_; }
+
+  /// True once a server's request reader and reply writer are both matched.
+  bool service_is_ready() const { return writer_->matched() > 0 && reader_->matched() > 0; }
+
+  bool wait_for_service(std::chrono::nanoseconds timeout) const {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (!service_is_ready()) {
+      if (std::chrono::steady_clock::now() >= deadline) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return true;
+  }
+
+  /// Sends without waiting for discovery; prefer call() or wait_for_service() first.
+  std::future<Resp> async_send(Req req) {
+    std::promise<Resp> p;
+    auto f = p.get_future();
+    {
+      std::lock_guard l(mu_);
+      req.request_header.client_guid = client_id_;
+      req.request_header.sequence_number = ++seq_;
+      pending_[req.request_header.sequence_number] = std::move(p);
+    }
+    writer_->write(&req, 0);
+    return f;
+  }
+
+  /// Waits for the service (at most `timeout`), sends, and waits for the reply within what is left of
+  /// `timeout`. nullopt on timeout.
+  std::optional<Resp> call(Req req, std::chrono::nanoseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    if (!wait_for_service(timeout)) return std::nullopt;
+    auto f = async_send(std::move(req));
+    const int64_t seq = seq_;
+    if (f.wait_until(deadline) != std::future_status::ready) {
+      std::lock_guard l(mu_);
+      pending_.erase(seq);
+      return std::nullopt;
+    }
+    return f.get();
+  }
+
+ private:
+  void on_reply() {
+    std::lock_guard l(mu_);
+    for (;;) {
+      Resp resp;
+      MessageInfo info;
+      if (!reader_->take(&resp, info)) return;
+      if (resp.request_header.client_guid != client_id_) continue;  // another client's reply
+      auto it = pending_.find(resp.request_header.sequence_number);
+      if (it == pending_.end()) continue;  // timed out already
+      it->second.set_value(std::move(resp));
+      pending_.erase(it);
+    }
+  }
+
+  std::string name_;
+  std::unique_ptr<DdsWriter> writer_;
+  std::unique_ptr<DdsReader> reader_;
+  uint64_t client_id_ = 0;
+  std::mutex mu_;
+  int64_t seq_ = 0;
+  std::map<int64_t, std::promise<Resp>> pending_;
+};
+
+}  // namespace cairn
+
+#endif  // CAIRN_SERVICE_HPP

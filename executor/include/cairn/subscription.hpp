@@ -1,0 +1,200 @@
+#ifndef CAIRN_SUBSCRIPTION_HPP
+#define CAIRN_SUBSCRIPTION_HPP
+
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <type_traits>
+#include <variant>
+
+#include "cairn/dds.hpp"
+#include "cairn/executor.hpp"
+#include "cairn/intra_process.hpp"
+#include "cairn/logging.hpp"
+#include "cairn/msgs/type_support.hpp"
+
+namespace cairn {
+
+class SubscriptionBase : public Executable {
+ public:
+  using Executable::Executable;
+  const std::string& topic() const { return topic_; }
+  const QoS& qos() const { return qos_; }
+  virtual void shutdown() = 0;
+
+ protected:
+  std::string topic_;
+  QoS qos_;
+};
+
+/// A subscription's callback may take the message as std::unique_ptr<T> (it owns it and may mutate it),
+/// std::shared_ptr<const T> or const T& (it shares it), each optionally followed by const MessageInfo&.
+template <class T>
+class Subscription : public SubscriptionBase, public IntraSink<T> {
+ public:
+  using OwnedCb = std::function<void(std::unique_ptr<T>, const MessageInfo&)>;
+  using SharedCb = std::function<void(std::shared_ptr<const T>, const MessageInfo&)>;
+  using RefCb = std::function<void(const T&, const MessageInfo&)>;
+  using Callback = std::variant<OwnedCb, SharedCb, RefCb>;
+
+  template <class F>
+  static Callback make_callback(F&& f) {
+    using SP = std::shared_ptr<const T>;
+    using UP = std::unique_ptr<T>;
+    if constexpr (std::is_invocable_v<F&, SP, const MessageInfo&>) {
+      return SharedCb(std::forward<F>(f));
+    } else if constexpr (std::is_invocable_v<F&, SP>) {
+      return SharedCb([f = std::forward<F>(f)](SP m, const MessageInfo&) mutable { f(std::move(m)); });
+    } else if constexpr (std::is_invocable_v<F&, UP, const MessageInfo&>) {
+      return OwnedCb(std::forward<F>(f));
+    } else if constexpr (std::is_invocable_v<F&, UP>) {
+      return OwnedCb([f = std::forward<F>(f)](UP m, const MessageInfo&) mutable { f(std::move(m)); });
+    } else if constexpr (std::is_invocable_v<F&, const T&, const MessageInfo&>) {
+      return RefCb(std::forward<F>(f));
+    } else if constexpr (std::is_invocable_v<F&, const T&>) {
+      return RefCb([f = std::forward<F>(f)](const T& m, const MessageInfo&) mutable { f(m); });
+    } else {
+      static_assert(sizeof(F) == 0, "subscription callback must take unique_ptr<T>, shared_ptr<const T> or const T&");
+    }
+  }
+
+  Subscription(std::shared_ptr<CallbackGroup> group, Executor* exec, std::string topic, QoS qos, Callback cb,
+               std::shared_ptr<Clock> clock, Logger logger)
+      : SubscriptionBase(std::move(group)), exec_(exec), cb_(std::move(cb)), clock_(std::move(clock)),
+        logger_(std::move(logger)) {
+    topic_ = std::move(topic);
+    qos_ = qos;
+  }
+
+  /// Connects the intra-process and DDS legs (after construction: they need shared_from_this).
+  void connect(std::shared_ptr<Channel<T>> channel, Context* ctx, bool dds, const DdsEndpointOptions& opts) {
+    channel_ = std::move(channel);
+    auto self = std::static_pointer_cast<Subscription<T>>(shared_from_this());
+    if (channel_) channel_->add(self, qos_.durability == QoS::Durability::TransientLocal);
+    if (dds && ctx) {
+      std::weak_ptr<Subscription<T>> weak = self;
+      reader_ = std::make_unique<DdsReader>(*ctx, dds_topic_name(topic_), msgs::type_support<T>(), qos_, opts,
+                                            [weak] {
+                                              if (auto s = weak.lock()) s->exec_->schedule(s);
+                                            });
+    }
+  }
+
+  void shutdown() override {
+    disable();
+    if (channel_) channel_->remove(this);
+    reader_.reset();
+  }
+
+  bool wants_ownership() const override { return std::holds_alternative<OwnedCb>(cb_); }
+
+  void deliver_owned(std::unique_ptr<T> msg, const MessageInfo& info) override { deliver(Item{std::move(msg), info}); }
+  void deliver_shared(std::shared_ptr<const T> msg, const MessageInfo& info) override {
+    deliver(Item{std::move(msg), info});
+  }
+
+  std::size_t publisher_count_inter_process() const { return reader_ ? reader_->matched() : 0; }
+  uint64_t dropped() const { return dropped_; }
+
+ protected:
+  void execute() override {
+    Item item;
+    bool have = false;
+    {
+      std::lock_guard l(mu_);
+      if (!queue_.empty()) {
+        item = std::move(queue_.front());
+        queue_.pop_front();
+        have = true;
+      }
+    }
+    if (have) {
+      invoke(std::move(item));
+      return;
+    }
+    if (!reader_) return;
+    // DDS leg: drain what has arrived (the listener may coalesce arrivals into one wake-up)
+    for (;;) {
+      auto msg = std::make_unique<T>();
+      MessageInfo info;
+      if (!reader_->take(msg.get(), info)) break;
+      invoke(Item{std::move(msg), info});
+    }
+  }
+
+ private:
+  struct Item {
+    std::variant<std::unique_ptr<T>, std::shared_ptr<const T>> msg;
+    MessageInfo info;
+  };
+
+  void deliver(Item&& item) {
+    if (!enabled()) return;
+    bool idle;
+    {
+      std::lock_guard l(mu_);
+      idle = queue_.empty();
+    }
+    if (idle && exec_->can_run_inline(group())) {
+      // Same executor thread: run right here, no queue, no wake-up (the zero-copy fast path).
+      exec_->run_inline([&] { guarded([&] { invoke(std::move(item)); }); });
+      return;
+    }
+    {
+      std::lock_guard l(mu_);
+      if (qos_.history == QoS::History::KeepLast && static_cast<int>(queue_.size()) >= std::max(qos_.depth, 1)) {
+        queue_.pop_front();  // keep-last: the oldest goes; its wake-up serves the newest
+        queue_.push_back(std::move(item));
+        ++dropped_;
+        return;
+      }
+      queue_.push_back(std::move(item));
+    }
+    exec_->schedule(shared_from_this());
+  }
+
+  void invoke(Item&& item) {
+    item.info.received_timestamp_ns = clock_->now().ns;
+    try {
+      std::visit(
+          [&](auto& cb) {
+            using CB = std::decay_t<decltype(cb)>;
+            auto* up = std::get_if<std::unique_ptr<T>>(&item.msg);
+            if constexpr (std::is_same_v<CB, OwnedCb>) {
+              if (up) {
+                cb(std::move(*up), item.info);
+              } else {  // a shared message to an owner that may mutate it: the one copy
+                cb(std::make_unique<T>(*std::get<std::shared_ptr<const T>>(item.msg)), item.info);
+              }
+            } else if constexpr (std::is_same_v<CB, SharedCb>) {
+              if (up) {
+                cb(std::shared_ptr<const T>(std::move(*up)), item.info);
+              } else {
+                cb(std::get<std::shared_ptr<const T>>(item.msg), item.info);
+              }
+            } else {
+              cb(up ? **up : *std::get<std::shared_ptr<const T>>(item.msg), item.info);
+            }
+          },
+          cb_);
+    } catch (const std::exception& e) {
+      CAIRN_ERROR(logger_, "callback on " << topic_ << " threw: " << e.what());
+    }
+  }
+
+  Executor* exec_;
+  Callback cb_;
+  std::shared_ptr<Clock> clock_;
+  Logger logger_;
+  std::shared_ptr<Channel<T>> channel_;
+  std::unique_ptr<DdsReader> reader_;
+  std::mutex mu_;
+  std::deque<Item> queue_;
+  uint64_t dropped_ = 0;
+};
+
+}  // namespace cairn
+
+#endif  // CAIRN_SUBSCRIPTION_HPP

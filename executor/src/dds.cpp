@@ -1,0 +1,137 @@
+#include "cairn/dds.hpp"
+
+#include <cstring>
+#include <stdexcept>
+#include <vector>
+
+#include "cairn/context.hpp"
+#include "cairn/msgs/type_support.hpp"
+#include "dds/dds.h"
+
+namespace cairn {
+
+std::string dds_topic_name(const std::string& resolved) {
+  return "rt" + (resolved.empty() || resolved[0] != '/' ? "/" + resolved : resolved);
+}
+
+namespace {
+dds_qos_t* endpoint_qos(const QoS& qos, const DdsEndpointOptions& opts) {
+  dds_qos_t* q = qos.to_dds();
+  if (opts.ignore_local) dds_qset_ignorelocal(q, DDS_IGNORELOCAL_PARTICIPANT);
+  if (!opts.node.empty()) {
+    const std::string ud = "cairn:node=" + opts.node + ";";
+    dds_qset_userdata(q, ud.data(), ud.size());
+  }
+  static const dds_data_representation_id_t xcdr1[] = {DDS_DATA_REPRESENTATION_XCDR1};  // as ROS 2
+  dds_qset_data_representation(q, 1, xcdr1);
+  return q;
+}
+
+Gid to_gid(const dds_guid_t& g) {
+  Gid out;
+  std::memcpy(out.data(), g.v, 16);
+  return out;
+}
+}  // namespace
+
+DdsWriter::DdsWriter(Context& ctx, const std::string& dds_topic, const msgs::TypeSupport& ts, const QoS& qos,
+                     const DdsEndpointOptions& opts)
+    : ts_(ts) {
+  const int32_t topic = ctx.topic(dds_topic, ts);
+  dds_qos_t* q = endpoint_qos(qos, opts);
+  writer_ = dds_create_writer(ctx.participant(), topic, q, nullptr);
+  dds_delete_qos(q);
+  if (writer_ < 0) {
+    throw std::runtime_error("cannot create DDS writer on '" + dds_topic + "': " + dds_strretcode(writer_));
+  }
+  dds_guid_t g;
+  if (dds_get_guid(writer_, &g) == DDS_RETCODE_OK) guid_ = to_gid(g);
+}
+
+DdsWriter::~DdsWriter() {
+  if (writer_ > 0) dds_delete(writer_);
+}
+
+void DdsWriter::write(const void* cpp, int64_t source_timestamp_ns) {
+  // The C sample borrows the C++ message's buffers (strings, primitive sequences): nothing is copied
+  // before Cyclone serializes it.
+  thread_local std::vector<std::max_align_t> sample;
+  thread_local msgs::Scratch scratch;
+  const std::size_t words = (ts_.c_size + sizeof(std::max_align_t) - 1) / sizeof(std::max_align_t);
+  if (sample.size() < words) sample.resize(words);
+  std::memset(sample.data(), 0, ts_.c_size);
+  scratch.clear();
+  ts_.to_c(cpp, sample.data(), scratch);
+  const dds_return_t rc = dds_write_ts(writer_, sample.data(), source_timestamp_ns);
+  scratch.clear();
+  if (rc != DDS_RETCODE_OK) {
+    throw std::runtime_error(std::string("dds_write failed: ") + dds_strretcode(rc));
+  }
+}
+
+int DdsWriter::matched() const {
+  dds_publication_matched_status_t st;
+  if (dds_get_publication_matched_status(writer_, &st) != DDS_RETCODE_OK) return 0;
+  return static_cast<int>(st.current_count);
+}
+
+DdsReader::DdsReader(Context& ctx, const std::string& dds_topic, const msgs::TypeSupport& ts, const QoS& qos,
+                     const DdsEndpointOptions& opts, std::function<void()> on_data)
+    : ts_(ts), on_data_(std::move(on_data)) {
+  const int32_t topic = ctx.topic(dds_topic, ts);
+  dds_qos_t* q = endpoint_qos(qos, opts);
+  dds_listener_t* l = dds_create_listener(this);
+  dds_lset_data_available(l, [](dds_entity_t, void* arg) {
+    auto* self = static_cast<DdsReader*>(arg);
+    if (self->on_data_) self->on_data_();
+  });
+  reader_ = dds_create_reader(ctx.participant(), topic, q, on_data_ ? l : nullptr);
+  dds_delete_listener(l);
+  dds_delete_qos(q);
+  if (reader_ < 0) {
+    throw std::runtime_error("cannot create DDS reader on '" + dds_topic + "': " + dds_strretcode(reader_));
+  }
+}
+
+DdsReader::~DdsReader() {
+  if (reader_ > 0) dds_delete(reader_);  // returns once no listener call is in progress
+}
+
+Gid DdsReader::publisher_gid(uint64_t handle) {
+  auto it = pubs_.find(handle);
+  if (it != pubs_.end()) return it->second.first;
+  Gid gid{};
+  if (dds_builtintopic_endpoint_t* ep = dds_get_matched_publication_data(reader_, handle)) {
+    std::memcpy(gid.data(), ep->key.v, 16);
+    dds_builtintopic_free_endpoint(ep);
+  }
+  pubs_[handle] = {gid, 0};
+  return gid;
+}
+
+bool DdsReader::take(void* cpp_out, MessageInfo& info) {
+  for (;;) {
+    void* buf[1] = {nullptr};
+    dds_sample_info_t si;
+    const int n = dds_take(reader_, buf, &si, 1, 1);  // loaned sample: no allocation on our side
+    if (n <= 0) return false;
+    const bool valid = si.valid_data;
+    if (valid) {
+      ts_.from_c(buf[0], cpp_out);
+      info.source_timestamp_ns = si.source_timestamp;
+      info.publisher_gid = publisher_gid(si.publication_handle);
+      info.sequence_number = ++pubs_[si.publication_handle].second;
+      info.from_intra_process = false;
+    }
+    dds_return_loan(reader_, buf, n);
+    if (valid) return true;
+  }
+}
+
+int DdsReader::matched() const {
+  dds_subscription_matched_status_t st;
+  if (dds_get_subscription_matched_status(reader_, &st) != DDS_RETCODE_OK) return 0;
+  return static_cast<int>(st.current_count);
+}
+
+}  // namespace cairn

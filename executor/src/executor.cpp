@@ -1,0 +1,264 @@
+#include "cairn/executor.hpp"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <set>
+
+namespace cairn {
+
+namespace {
+thread_local const Executor* tl_executor = nullptr;
+thread_local const CallbackGroup* tl_group = nullptr;
+thread_local int tl_inline_depth = 0;
+constexpr int kMaxInlineDepth = 16;  // deeper same-thread chains go through the queue (no stack blow-up)
+
+std::mutex& all_mu() {
+  static std::mutex m;
+  return m;
+}
+std::set<Executor*>& all_executors() {
+  static std::set<Executor*> s;
+  return s;
+}
+std::atomic<bool> g_signal{false};
+int g_signal_pipe[2] = {-1, -1};
+}  // namespace
+
+// ---------------- Executable ----------------
+void Executable::disable() {
+  enabled_.store(false, std::memory_order_release);
+  std::lock_guard l(run_mu_);  // waits for a callback in flight on another thread
+}
+
+// ---------------- TimerBase ----------------
+TimerBase::TimerBase(std::shared_ptr<CallbackGroup> g, std::shared_ptr<Clock> clock, std::chrono::nanoseconds period,
+                     std::function<void()> cb)
+    : Executable(std::move(g)), clock_(std::move(clock)), period_(period), cb_(std::move(cb)) {
+  next_due_ = clock_->now().ns + period_.count();
+}
+
+void TimerBase::reset() { next_due_ = clock_->now().ns + period_.count(); }
+
+void TimerBase::execute() {
+  if (canceled_) return;
+  const int64_t now = clock_->now().ns;
+  int64_t next = next_due_.load() + period_.count();
+  if (next <= now) next = now + period_.count();  // missed periods are skipped, not replayed
+  next_due_ = next;
+  cb_();
+}
+
+// ---------------- Executor ----------------
+Executor::Executor() : Executor(Options{}) {}
+
+Executor::Executor(Options opts) : opts_(opts) {
+  if (opts_.threads == 0) opts_.threads = std::max(1u, std::thread::hardware_concurrency());
+  ring_.resize(64);
+  std::lock_guard l(all_mu());
+  all_executors().insert(this);
+}
+
+Executor::~Executor() {
+  {
+    std::lock_guard l(all_mu());
+    all_executors().erase(this);
+  }
+  cancel();
+}
+
+void Executor::push_locked(std::shared_ptr<Executable> e) {
+  if (size_ == ring_.size()) {
+    std::vector<std::shared_ptr<Executable>> bigger(ring_.size() * 2);
+    for (std::size_t i = 0; i < size_; ++i) bigger[i] = std::move(ring_[(head_ + i) % ring_.size()]);
+    ring_ = std::move(bigger);
+    head_ = 0;
+  }
+  ring_[(head_ + size_) % ring_.size()] = std::move(e);
+  ++size_;
+}
+
+std::shared_ptr<Executable> Executor::pop_locked() {
+  if (size_ == 0) return nullptr;
+  auto e = std::move(ring_[head_]);
+  head_ = (head_ + 1) % ring_.size();
+  --size_;
+  return e;
+}
+
+void Executor::schedule(const std::shared_ptr<Executable>& e) {
+  std::lock_guard l(mu_);
+  push_locked(e);
+  if (sleeping_ > 0) cv_.notify_one();
+}
+
+void Executor::add_timer(const std::shared_ptr<TimerBase>& t) {
+  {
+    std::lock_guard l(mu_);
+    timers_.push_back(t);
+  }
+  if (t->clock()->type() == ClockType::Ros) {
+    // sim time moves in jumps: re-check timers whenever it does
+    std::weak_ptr<TimerBase> wt = t;
+    t->clock()->on_update([this, wt] {
+      if (!wt.expired()) notify();
+    });
+  }
+  notify();
+}
+
+void Executor::remove_timer(const TimerBase* t) {
+  std::lock_guard l(mu_);
+  timers_.erase(std::remove_if(timers_.begin(), timers_.end(), [t](const auto& p) { return p.get() == t; }),
+                timers_.end());
+}
+
+void Executor::notify() {
+  std::lock_guard l(mu_);
+  cv_.notify_all();
+}
+
+void Executor::cancel() {
+  canceled_.store(true);
+  std::lock_guard l(mu_);
+  cv_.notify_all();
+}
+
+void Executor::cancel_all() {
+  std::lock_guard l(all_mu());
+  for (auto* e : all_executors()) e->cancel();
+}
+
+bool Executor::signal_received() { return g_signal.load(); }
+
+void Executor::install_signal_handlers() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (pipe(g_signal_pipe) != 0) return;
+    struct sigaction sa {};
+    sa.sa_handler = [](int) {
+      g_signal.store(true);
+      const char c = 1;
+      [[maybe_unused]] auto r = write(g_signal_pipe[1], &c, 1);  // async-signal-safe wake-up
+    };
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+    std::thread([] {
+      char c;
+      while (read(g_signal_pipe[0], &c, 1) < 0) {
+      }
+      Executor::cancel_all();
+    }).detach();
+  });
+}
+
+bool Executor::can_run_inline(const CallbackGroup* g) const {
+  if (tl_executor != this || tl_inline_depth >= kMaxInlineDepth) return false;
+  if (opts_.threads == 1) return true;
+  return g == tl_group || (g && g->type() == CallbackGroup::Type::Reentrant);
+}
+
+void Executor::collect_due_timers_locked() {
+  for (auto& t : timers_) {
+    if (t->queued_ || t->canceled() || !t->enabled()) continue;
+    if (t->clock()->now().ns >= t->next_due_.load()) {
+      t->queued_ = true;
+      push_locked(t);
+    }
+  }
+}
+
+std::chrono::steady_clock::time_point Executor::next_timer_wakeup_locked() const {
+  auto best = std::chrono::steady_clock::time_point::max();
+  const auto now = std::chrono::steady_clock::now();
+  for (const auto& t : timers_) {
+    if (t->queued_ || t->canceled()) continue;
+    if (t->clock()->type() == ClockType::Ros && t->clock()->sim_time_active()) continue;  // woken by notify()
+    const int64_t dt = t->next_due_.load() - t->clock()->now().ns;
+    best = std::min(best, now + std::chrono::nanoseconds(std::max<int64_t>(dt, 0)));
+  }
+  return best;
+}
+
+bool Executor::run_one(std::unique_lock<std::mutex>& lock, Time*) {
+  collect_due_timers_locked();
+  std::size_t n = size_;
+  for (std::size_t i = 0; i < n; ++i) {
+    auto e = pop_locked();
+    CallbackGroup* g = e->group();
+    const bool exclusive = g && g->type() == CallbackGroup::Type::MutuallyExclusive;
+    if (exclusive && g->busy_) {
+      blocked_.push_back(std::move(e));
+      continue;
+    }
+    if (exclusive) g->busy_ = true;
+    lock.unlock();
+    const Executor* prev_exec = tl_executor;
+    const CallbackGroup* prev_group = tl_group;
+    tl_executor = this;
+    tl_group = g;
+    e->run();
+    tl_executor = prev_exec;
+    tl_group = prev_group;
+    executed_.fetch_add(1, std::memory_order_relaxed);
+    lock.lock();
+    if (exclusive) {
+      g->busy_ = false;
+      if (!blocked_.empty()) {
+        for (auto& b : blocked_) push_locked(std::move(b));
+        blocked_.clear();
+        if (sleeping_ > 0) cv_.notify_all();
+      }
+    }
+    if (auto* t = dynamic_cast<TimerBase*>(e.get())) t->queued_ = false;
+    return true;
+  }
+  return false;
+}
+
+void Executor::worker(const std::function<bool()>* pred, std::chrono::steady_clock::time_point deadline) {
+  std::unique_lock lock(mu_);
+  while (!canceled_.load()) {
+    if (pred) {
+      lock.unlock();
+      const bool done = (*pred)();
+      lock.lock();
+      if (done) return;
+    }
+    if (run_one(lock, nullptr)) continue;
+    const auto wake = std::min(next_timer_wakeup_locked(), deadline);
+    if (std::chrono::steady_clock::now() >= deadline) return;
+    ++sleeping_;
+    if (wake == std::chrono::steady_clock::time_point::max()) {
+      cv_.wait(lock);
+    } else {
+      cv_.wait_until(lock, wake);
+    }
+    --sleeping_;
+  }
+}
+
+void Executor::spin() {
+  std::vector<std::thread> extra;
+  for (std::size_t i = 1; i < opts_.threads; ++i) {
+    extra.emplace_back([this] { worker(nullptr, std::chrono::steady_clock::time_point::max()); });
+  }
+  worker(nullptr, std::chrono::steady_clock::time_point::max());
+  for (auto& t : extra) t.join();
+}
+
+bool Executor::spin_until(const std::function<bool()>& pred, std::chrono::nanoseconds timeout) {
+  worker(&pred, std::chrono::steady_clock::now() + timeout);
+  return pred();
+}
+
+void Executor::spin_for(std::chrono::nanoseconds duration) {
+  worker(nullptr, std::chrono::steady_clock::now() + duration);
+}
+
+void Executor::enter_inline() { ++tl_inline_depth; }
+void Executor::leave_inline() { --tl_inline_depth; }
+
+}  // namespace cairn
