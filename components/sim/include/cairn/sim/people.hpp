@@ -1,0 +1,126 @@
+// Simulated people: two-legged walkers (each leg a small circle swinging with the gait phase, so a laser
+// sees leg pairs), driven by recorded trajectories, scripted waypoints or a schedule-driven crowd model.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cairn/sim/raycast.hpp"
+#include "cairn/sim/rng.hpp"
+#include "cairn/sim/types.hpp"
+#include "cairn/sim/world.hpp"
+
+namespace cairn::sim {
+
+/// Leg geometry and gait. Legs sit at ±hip_half_width left/right of the walking direction; while walking
+/// they swing fore and aft in antiphase, x_leg = ±swing(v) sin(phase); the phase advances by 2 pi per
+/// stride (two steps). A standing person keeps both legs side by side.
+struct GaitConfig {
+  double leg_radius = 0.06;
+  double hip_half_width = 0.1;
+  double stride_length = 1.3;     ///< m per gait cycle (two steps) at normal speed
+  double swing_amplitude = 0.3;   ///< m, fore/aft leg excursion at speeds >= swing_speed
+  double swing_speed = 1.0;       ///< m/s
+};
+
+/// Leg centres for a person at `position` walking along `heading` with `speed` at gait `phase`.
+void legPositions(const GaitConfig& gait, Vec2 position, double heading, double speed, double phase, Vec2 legs[2]);
+
+/// A recorded trajectory: samples sorted by time.
+struct Trajectory {
+  int id = 0;
+  std::vector<double> t;
+  std::vector<Vec2> p;
+  double start() const { return t.front(); }
+  double end() const { return t.back(); }
+  /// Linear interpolation; velocity from the enclosing samples. Requires start() <= time <= end().
+  void sample(double time, Vec2& pos, Vec2& vel) const;
+};
+
+/// Plain CSV `t,id,x,y` (seconds, integer id, metres), one sample per line, optional header line,
+/// '#' comments. Throws InputError with file:line.
+std::vector<Trajectory> loadTrajectoriesCsv(const std::string& path);
+/// ETH/UCY obsmat.txt: `frame ped_id pos_x pos_z pos_y v_x v_z v_y`; t = frame * frame_period
+/// (default 0.4 s / 6 frames: ETH annotations every 6th frame at 2.5 fps).
+std::vector<Trajectory> loadEthObsmat(const std::string& path, double frame_period = 0.4 / 6.0);
+/// Edinburgh Informatics Forum `TRACK.Rk=[[x y t];...];` in image pixels (24.7 mm/pixel) and frames
+/// (default 1/9 s); returned in metres and seconds.
+std::vector<Trajectory> loadEdinburghTracks(const std::string& path, double frame_period = 1.0 / 9.0,
+                                            double metres_per_pixel = 0.0247);
+/// world = offset ⊕ (scale * p), t + time_offset.
+void transformTrajectories(std::vector<Trajectory>& trajs, const Pose2& offset, double scale, double time_offset);
+
+/// Occupancy grid of the static walls (plus static furniture) inflated by a clearance, with A* search;
+/// used by the crowd model to walk "along free space".
+class FreeSpaceGrid {
+ public:
+  FreeSpaceGrid(const World& world, double resolution = 0.2, double clearance = 0.3);
+  bool free(Vec2 p) const;
+  /// Shortest 8-connected path from a to b through free cells, shortcut by line of sight; empty if none.
+  std::vector<Vec2> plan(Vec2 a, Vec2 b) const;
+  /// A random free point inside the region (rejection sampling); returns false if none found.
+  bool samplePoint(const Region& region, Rng& rng, Vec2& out) const;
+
+ private:
+  int index(int cx, int cy) const { return cy * nx_ + cx; }
+  bool cellFree(int cx, int cy) const { return cx >= 0 && cy >= 0 && cx < nx_ && cy < ny_ && !blocked_[index(cx, cy)]; }
+  bool lineFree(Vec2 a, Vec2 b) const;
+  double res_;
+  Vec2 min_;
+  int nx_ = 0, ny_ = 0;
+  std::vector<std::uint8_t> blocked_;
+};
+
+/// All people of a world at the current sim time. Deterministic for a given seed.
+class PeopleSimulator {
+ public:
+  /// enable_sources: the world's recorded/scripted people; enable_crowd: its crowd model (if any).
+  PeopleSimulator(const World& world, GaitConfig gait, Rng rng, bool enable_sources = true, bool enable_crowd = true);
+  /// Advances people to absolute time t (>= the previous t).
+  void update(double t);
+  const std::vector<PersonState>& people() const { return people_; }
+  /// Leg circles of all people (appends).
+  void legCircles(std::vector<Circle>& out) const;
+  /// Adds recorded trajectories (already in world coordinates).
+  void addTrajectories(std::vector<Trajectory> trajs, bool loop);
+  /// Adds a scripted walker along waypoints (loops) at `speed`, appearing at `start_time`.
+  void addScripted(std::vector<Vec2> waypoints, double speed, double start_time);
+  int spawnedCrowd() const { return spawned_; }
+
+ private:
+  struct Agent {
+    int id = 0;
+    enum class Kind { Recorded, Scripted, Crowd } kind = Kind::Scripted;
+    const Trajectory* traj = nullptr;
+    bool loop = false;
+    std::vector<Vec2> path;   // scripted / crowd
+    std::size_t next = 1;     // next path point
+    double speed = 1.0;
+    double start_time = 0.0;
+    Vec2 pos;
+    double heading = 0.0;
+    double phase = 0.0;
+    bool active = false;
+    bool done = false;
+  };
+  void spawnCrowd(double t0, double t1);
+  void moveAlongPath(Agent& a, double dt);
+
+  const World& world_;
+  GaitConfig gait_;
+  Rng rng_;
+  std::vector<std::unique_ptr<Trajectory>> trajectories_;
+  std::vector<Agent> agents_;
+  std::vector<PersonState> people_;
+  std::unique_ptr<FreeSpaceGrid> free_;
+  std::vector<double> next_arrival_;
+  double t_ = 0.0;
+  bool started_ = false;
+  int next_id_ = 1;
+  int spawned_ = 0;
+  bool crowd_ = false;
+};
+
+}  // namespace cairn::sim

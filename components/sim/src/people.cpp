@@ -1,0 +1,457 @@
+#include "cairn/sim/people.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <queue>
+#include <sstream>
+
+namespace cairn::sim {
+
+// ---------------------------------------------------------------- legs
+void legPositions(const GaitConfig& g, Vec2 position, double heading, double speed, double phase, Vec2 legs[2]) {
+  const Vec2 fwd{std::cos(heading), std::sin(heading)};
+  const Vec2 left{-fwd.y, fwd.x};
+  const double swing = g.swing_amplitude * std::min(1.0, std::abs(speed) / g.swing_speed) * std::sin(phase);
+  legs[0] = position + g.hip_half_width * left + swing * fwd;
+  legs[1] = position - g.hip_half_width * left - swing * fwd;
+}
+
+// ---------------------------------------------------------------- trajectories
+void Trajectory::sample(double time, Vec2& pos, Vec2& vel) const {
+  if (t.size() == 1) {
+    pos = p.front();
+    vel = {};
+    return;
+  }
+  auto it = std::upper_bound(t.begin(), t.end(), time);
+  std::size_t i1 = std::clamp<std::size_t>(static_cast<std::size_t>(it - t.begin()), 1, t.size() - 1);
+  const std::size_t i0 = i1 - 1;
+  const double dt = t[i1] - t[i0];
+  const double u = dt > 0 ? std::clamp((time - t[i0]) / dt, 0.0, 1.0) : 0.0;
+  pos = p[i0] + u * (p[i1] - p[i0]);
+  vel = dt > 0 ? (1.0 / dt) * (p[i1] - p[i0]) : Vec2{};
+}
+
+namespace {
+bool parseDouble(const std::string& s, double& out) {
+  const char* b = s.c_str();
+  char* e = nullptr;
+  out = std::strtod(b, &e);
+  if (e == b) return false;
+  while (*e == ' ' || *e == '\t' || *e == '\r') ++e;
+  return *e == '\0' && std::isfinite(out);
+}
+
+std::vector<Trajectory> group(std::map<int, Trajectory>& by_id) {
+  std::vector<Trajectory> out;
+  for (auto& [id, tr] : by_id) {
+    std::vector<std::size_t> order(tr.t.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tr.t[a] < tr.t[b]; });
+    Trajectory s;
+    s.id = id;
+    for (auto i : order) s.t.push_back(tr.t[i]), s.p.push_back(tr.p[i]);
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+std::ifstream openOrThrow(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open file");
+  return in;
+}
+}  // namespace
+
+std::vector<Trajectory> loadTrajectoriesCsv(const std::string& path) {
+  auto in = openOrThrow(path);
+  std::map<int, Trajectory> by_id;
+  std::string line;
+  int lineno = 0;
+  bool first = true;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    std::string item;
+    while (std::getline(ss, item, ',')) f.push_back(item);
+    double v[4];
+    bool ok = f.size() == 4;
+    for (int i = 0; ok && i < 4; ++i) ok = parseDouble(f[i], v[i]);
+    if (!ok) {
+      if (first) {  // header line
+        first = false;
+        continue;
+      }
+      throw InputError(path, lineno, "expected 't,id,x,y' with numbers, got '" + line + "'");
+    }
+    first = false;
+    if (v[1] != std::floor(v[1])) throw InputError(path, lineno, "id must be an integer");
+    Trajectory& tr = by_id[static_cast<int>(v[1])];
+    tr.t.push_back(v[0]);
+    tr.p.push_back({v[2], v[3]});
+  }
+  return group(by_id);
+}
+
+std::vector<Trajectory> loadEthObsmat(const std::string& path, double frame_period) {
+  auto in = openOrThrow(path);
+  std::map<int, Trajectory> by_id;
+  std::string line;
+  int lineno = 0;
+  while (std::getline(in, line)) {
+    ++lineno;
+    std::stringstream ss(line);
+    double v[8];
+    int n = 0;
+    while (n < 8 && ss >> v[n]) ++n;
+    if (n == 0 && line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::string rest;
+    if (n != 8 || (ss >> rest)) throw InputError(path, lineno, "expected 8 numbers (frame ped_id x z y vx vz vy)");
+    Trajectory& tr = by_id[static_cast<int>(v[1])];
+    tr.t.push_back(v[0] * frame_period);
+    tr.p.push_back({v[2], v[4]});
+  }
+  return group(by_id);
+}
+
+std::vector<Trajectory> loadEdinburghTracks(const std::string& path, double frame_period, double mpp) {
+  auto in = openOrThrow(path);
+  std::map<int, Trajectory> by_id;
+  std::string line;
+  int lineno = 0;
+  while (std::getline(in, line)) {
+    ++lineno;
+    const auto pos = line.find("TRACK.R");
+    if (pos == std::string::npos) continue;
+    const auto eq = line.find('=', pos);
+    if (eq == std::string::npos) throw InputError(path, lineno, "TRACK entry without '='");
+    int id = 0;
+    try {
+      id = std::stoi(line.substr(pos + 7, eq - pos - 7));
+    } catch (const std::exception&) {
+      throw InputError(path, lineno, "bad TRACK id");
+    }
+    std::string body = line.substr(eq + 1);
+    for (char& c : body)
+      if (c == '[' || c == ']' || c == ';') c = ' ';
+    std::stringstream ss(body);
+    std::vector<double> nums;
+    double v;
+    while (ss >> v) nums.push_back(v);
+    if (!ss.eof()) throw InputError(path, lineno, "non-numeric value in TRACK.R" + std::to_string(id));
+    if (nums.empty() || nums.size() % 3 != 0) throw InputError(path, lineno, "TRACK entries must be [x y t] triples");
+    Trajectory& tr = by_id[id];
+    for (std::size_t i = 0; i < nums.size(); i += 3) {
+      tr.p.push_back({nums[i] * mpp, nums[i + 1] * mpp});
+      tr.t.push_back(nums[i + 2] * frame_period);
+    }
+  }
+  return group(by_id);
+}
+
+void transformTrajectories(std::vector<Trajectory>& trajs, const Pose2& offset, double scale, double time_offset) {
+  for (auto& tr : trajs) {
+    for (auto& p : tr.p) p = transformPoint(offset, scale * p);
+    for (auto& t : tr.t) t += time_offset;
+  }
+}
+
+// ---------------------------------------------------------------- free space + A*
+namespace {
+double pointSegDist(Vec2 p, Vec2 a, Vec2 b) {
+  const Vec2 e = b - a;
+  const double l2 = dot(e, e);
+  const double u = l2 > 0 ? std::clamp(dot(p - a, e) / l2, 0.0, 1.0) : 0.0;
+  return norm(p - (a + u * e));
+}
+}  // namespace
+
+FreeSpaceGrid::FreeSpaceGrid(const World& world, double resolution, double clearance) : res_(resolution) {
+  min_ = {world.bounds_min.x - clearance, world.bounds_min.y - clearance};
+  nx_ = static_cast<int>(std::ceil((world.bounds_max.x - world.bounds_min.x + 2 * clearance) / res_)) + 1;
+  ny_ = static_cast<int>(std::ceil((world.bounds_max.y - world.bounds_min.y + 2 * clearance) / res_)) + 1;
+  blocked_.assign(static_cast<std::size_t>(nx_) * ny_, 0);
+  std::vector<Segment> segs = world.walls;
+  std::vector<Circle> circles;
+  for (const auto& f : world.furniture)
+    if (f.schedule.times.empty()) f.geometry(0.0, segs, circles);  // static furniture only
+  auto mark = [&](double x0, double y0, double x1, double y1, auto&& dist) {
+    const int cx0 = std::max(0, static_cast<int>((x0 - clearance - min_.x) / res_));
+    const int cx1 = std::min(nx_ - 1, static_cast<int>((x1 + clearance - min_.x) / res_) + 1);
+    const int cy0 = std::max(0, static_cast<int>((y0 - clearance - min_.y) / res_));
+    const int cy1 = std::min(ny_ - 1, static_cast<int>((y1 + clearance - min_.y) / res_) + 1);
+    for (int cy = cy0; cy <= cy1; ++cy)
+      for (int cx = cx0; cx <= cx1; ++cx) {
+        const Vec2 c{min_.x + (cx + 0.5) * res_, min_.y + (cy + 0.5) * res_};
+        if (dist(c) < clearance) blocked_[index(cx, cy)] = 1;
+      }
+  };
+  for (const auto& s : segs)
+    mark(std::min(s.a.x, s.b.x), std::min(s.a.y, s.b.y), std::max(s.a.x, s.b.x), std::max(s.a.y, s.b.y),
+         [&](Vec2 c) { return pointSegDist(c, s.a, s.b); });
+  for (const auto& c : circles)
+    mark(c.center.x - c.radius, c.center.y - c.radius, c.center.x + c.radius, c.center.y + c.radius,
+         [&](Vec2 p) { return norm(p - c.center) - c.radius; });
+}
+
+bool FreeSpaceGrid::free(Vec2 p) const {
+  return cellFree(static_cast<int>(std::floor((p.x - min_.x) / res_)), static_cast<int>(std::floor((p.y - min_.y) / res_)));
+}
+
+bool FreeSpaceGrid::lineFree(Vec2 a, Vec2 b) const {
+  const double len = norm(b - a);
+  const int n = std::max(1, static_cast<int>(std::ceil(len / (0.5 * res_))));
+  for (int i = 0; i <= n; ++i)
+    if (!free(a + (static_cast<double>(i) / n) * (b - a))) return false;
+  return true;
+}
+
+std::vector<Vec2> FreeSpaceGrid::plan(Vec2 a, Vec2 b) const {
+  const int sx = static_cast<int>(std::floor((a.x - min_.x) / res_)), sy = static_cast<int>(std::floor((a.y - min_.y) / res_));
+  const int gx = static_cast<int>(std::floor((b.x - min_.x) / res_)), gy = static_cast<int>(std::floor((b.y - min_.y) / res_));
+  if (!cellFree(sx, sy) || !cellFree(gx, gy)) return {};
+  const std::size_t n = blocked_.size();
+  std::vector<double> g(n, std::numeric_limits<double>::infinity());
+  std::vector<int> parent(n, -1);
+  std::vector<std::uint8_t> closed(n, 0);
+  auto h = [&](int cx, int cy) {  // octile distance
+    const double dx = std::abs(cx - gx), dy = std::abs(cy - gy);
+    return (dx + dy) + (std::numbers::sqrt2 - 2.0) * std::min(dx, dy);
+  };
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
+  const int start = index(sx, sy), goal = index(gx, gy);
+  g[start] = 0;
+  open.push({h(sx, sy), start});
+  while (!open.empty()) {
+    const int cur = open.top().second;
+    open.pop();
+    if (closed[cur]) continue;
+    closed[cur] = 1;
+    if (cur == goal) break;
+    const int cx = cur % nx_, cy = cur / nx_;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (!dx && !dy) continue;
+        const int nx = cx + dx, ny = cy + dy;
+        if (!cellFree(nx, ny)) continue;
+        if (dx && dy && (!cellFree(cx + dx, cy) || !cellFree(cx, cy + dy))) continue;  // no corner cutting
+        const int ni = index(nx, ny);
+        const double ng = g[cur] + ((dx && dy) ? std::numbers::sqrt2 : 1.0);
+        if (ng < g[ni]) {
+          g[ni] = ng;
+          parent[ni] = cur;
+          open.push({ng + h(nx, ny), ni});
+        }
+      }
+  }
+  if (!closed[goal]) return {};
+  std::vector<Vec2> cells;
+  for (int c = goal; c != -1; c = parent[c])
+    cells.push_back({min_.x + (c % nx_ + 0.5) * res_, min_.y + (c / nx_ + 0.5) * res_});
+  std::reverse(cells.begin(), cells.end());
+  cells.front() = a;
+  cells.back() = b;
+  // line-of-sight shortcutting
+  std::vector<Vec2> path{cells.front()};
+  std::size_t i = 0;
+  while (i + 1 < cells.size()) {
+    std::size_t j = cells.size() - 1;
+    while (j > i + 1 && !lineFree(cells[i], cells[j])) --j;
+    path.push_back(cells[j]);
+    i = j;
+  }
+  return path;
+}
+
+bool FreeSpaceGrid::samplePoint(const Region& region, Rng& rng, Vec2& out) const {
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (const auto& p : region.polygon) x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+  for (int k = 0; k < 200; ++k) {
+    const Vec2 p{rng.uniform(x0, x1), rng.uniform(y0, y1)};
+    if (region.contains(p) && free(p)) {
+      out = p;
+      return true;
+    }
+  }
+  return false;
+}
+
+// ---------------------------------------------------------------- people simulator
+PeopleSimulator::PeopleSimulator(const World& world, GaitConfig gait, Rng rng, bool enable_sources, bool enable_crowd)
+    : world_(world), gait_(gait), rng_(rng), crowd_(enable_crowd && world.crowd.has_value()) {
+  for (const auto& src : world.people) {
+    if (!enable_sources) break;
+    if (src.kind == "scripted") {
+      addScripted(src.waypoints, src.speed, src.start_time);
+      continue;
+    }
+    std::vector<Trajectory> trajs;
+    if (src.kind == "csv") trajs = loadTrajectoriesCsv(src.file);
+    else if (src.kind == "eth_obsmat") trajs = src.frame_period > 0 ? loadEthObsmat(src.file, src.frame_period) : loadEthObsmat(src.file);
+    else if (src.kind == "edinburgh")
+      trajs = src.frame_period > 0 ? loadEdinburghTracks(src.file, src.frame_period) : loadEdinburghTracks(src.file);
+    transformTrajectories(trajs, src.offset, src.scale, src.time_offset);
+    addTrajectories(std::move(trajs), src.loop);
+  }
+  if (crowd_) free_ = std::make_unique<FreeSpaceGrid>(world);
+}
+
+void PeopleSimulator::addTrajectories(std::vector<Trajectory> trajs, bool loop) {
+  if (trajs.empty()) return;
+  double t0 = std::numeric_limits<double>::infinity(), t1 = -t0;
+  for (const auto& tr : trajs) t0 = std::min(t0, tr.start()), t1 = std::max(t1, tr.end());
+  for (auto& tr : trajs) {
+    trajectories_.push_back(std::make_unique<Trajectory>(std::move(tr)));
+    Agent a;
+    a.id = next_id_++;
+    a.kind = Agent::Kind::Recorded;
+    a.traj = trajectories_.back().get();
+    a.loop = loop;
+    a.start_time = t0;          // loop window start
+    a.speed = t1 - t0 + 1.0;    // loop period (reused field)
+    agents_.push_back(std::move(a));
+  }
+}
+
+void PeopleSimulator::addScripted(std::vector<Vec2> waypoints, double speed, double start_time) {
+  Agent a;
+  a.id = next_id_++;
+  a.kind = Agent::Kind::Scripted;
+  a.path = std::move(waypoints);
+  a.speed = speed;
+  a.start_time = start_time;
+  a.pos = a.path.front();
+  a.heading = std::atan2(a.path[1].y - a.path[0].y, a.path[1].x - a.path[0].x);
+  agents_.push_back(std::move(a));
+}
+
+void PeopleSimulator::moveAlongPath(Agent& a, double dt) {
+  double remaining = a.speed * dt;
+  while (remaining > 0 && !a.done) {
+    if (a.next >= a.path.size()) {
+      if (a.kind == Agent::Kind::Scripted) a.next = 0;  // scripted walkers loop
+      else {
+        a.done = true;
+        break;
+      }
+    }
+    const Vec2 target = a.path[a.next];
+    const Vec2 d = target - a.pos;
+    const double dist = norm(d);
+    if (dist > 1e-9) a.heading = std::atan2(d.y, d.x);
+    if (dist <= remaining) {
+      a.pos = target;
+      remaining -= dist;
+      ++a.next;
+    } else {
+      a.pos = a.pos + (remaining / dist) * d;
+      remaining = 0;
+    }
+  }
+}
+
+void PeopleSimulator::spawnCrowd(double t0, double t1) {
+  // Non-homogeneous Poisson arrivals per source by thinning (Lewis & Shedler 1979): candidates at the
+  // peak rate, accepted with rate(t)/peak. The stream does not depend on the update step.
+  const CrowdConfig& c = *world_.crowd;
+  double peak_factor = 1.0;
+  for (const auto& term : c.terms) peak_factor += std::abs(term.amplitude);
+  const double peak = c.base_rate * peak_factor / 3600.0;
+  if (peak <= 0) return;
+  if (!started_) {
+    next_arrival_.assign(c.sources.size(), 0.0);
+    for (auto& na : next_arrival_) na = t0 - std::log(1.0 - rng_.uniform()) / peak;
+  }
+  for (std::size_t s = 0; s < c.sources.size(); ++s) {
+    while (next_arrival_[s] <= t1) {
+      const double t = next_arrival_[s];
+      next_arrival_[s] = t - std::log(1.0 - rng_.uniform()) / peak;
+      const double accept = rng_.uniform();
+      const std::size_t sink_idx = static_cast<std::size_t>(rng_.uniform() * c.sinks.size());
+      const double speed = std::clamp(rng_.gaussian(c.speed, c.speed_sigma), 0.4, 2.0);
+      if (accept * peak > c.rateAt(t)) continue;
+      int active = 0;
+      for (const auto& a : agents_) active += a.kind == Agent::Kind::Crowd && !a.done;
+      if (active >= c.max_people) continue;
+      const Region* from = world_.region(c.sources[s]);
+      const Region* to = world_.region(c.sinks[sink_idx]);
+      Vec2 p0, p1;
+      if (!free_->samplePoint(*from, rng_, p0) || !free_->samplePoint(*to, rng_, p1)) continue;
+      auto path = free_->plan(p0, p1);
+      if (path.size() < 2) continue;
+      Agent a;
+      a.id = next_id_++;
+      a.kind = Agent::Kind::Crowd;
+      a.path = std::move(path);
+      a.speed = speed;
+      a.start_time = t;
+      a.pos = a.path.front();
+      a.active = true;
+      a.heading = std::atan2(a.path[1].y - a.path[0].y, a.path[1].x - a.path[0].x);
+      // walk the part of the step after the arrival time
+      moveAlongPath(a, std::max(0.0, t1 - t));
+      agents_.push_back(std::move(a));
+      ++spawned_;
+    }
+  }
+}
+
+void PeopleSimulator::update(double t) {
+  const double dt = started_ ? std::max(0.0, t - t_) : 0.0;
+  if (crowd_) spawnCrowd(started_ ? t_ : t, t);
+  started_ = true;
+  t_ = t;
+  people_.clear();
+  for (auto& a : agents_) {
+    Vec2 vel{};
+    const Vec2 before = a.pos;
+    if (a.kind == Agent::Kind::Recorded) {
+      double tt = t;
+      if (a.loop) tt = a.start_time + std::fmod(t - a.start_time, a.speed);
+      a.active = tt >= a.traj->start() && tt <= a.traj->end();
+      if (!a.active) continue;
+      a.traj->sample(tt, a.pos, vel);
+      if (norm(vel) > 0.05) a.heading = std::atan2(vel.y, vel.x);
+    } else if (a.kind == Agent::Kind::Scripted) {
+      if (t < a.start_time) continue;
+      if (!a.active) {
+        a.active = true;
+      } else {
+        moveAlongPath(a, dt);
+      }
+      vel = a.speed * Vec2{std::cos(a.heading), std::sin(a.heading)};
+    } else {
+      if (a.done) continue;
+      if (t > a.start_time) moveAlongPath(a, std::min(dt, t - a.start_time));
+      if (a.done) continue;
+      vel = a.speed * Vec2{std::cos(a.heading), std::sin(a.heading)};
+    }
+    const double moved = norm(a.pos - before);
+    if (moved < 1.0) a.phase = std::fmod(a.phase + 2.0 * std::numbers::pi * moved / gait_.stride_length, 2.0 * std::numbers::pi);
+    PersonState s;
+    s.id = a.id;
+    s.position = a.pos;
+    s.heading = a.heading;
+    s.velocity = vel;
+    s.leg_radius = gait_.leg_radius;
+    legPositions(gait_, a.pos, a.heading, norm(vel), a.phase, s.legs);
+    people_.push_back(s);
+  }
+  // finished crowd agents are dropped so long runs keep constant memory
+  std::erase_if(agents_, [](const Agent& a) { return a.kind == Agent::Kind::Crowd && a.done; });
+}
+
+void PeopleSimulator::legCircles(std::vector<Circle>& out) const {
+  for (const auto& p : people_)
+    for (const auto& l : p.legs) out.push_back({l, p.leg_radius, 0.3F});
+}
+
+}  // namespace cairn::sim

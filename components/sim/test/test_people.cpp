@@ -1,0 +1,178 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+
+#include "cairn/sim/people.hpp"
+
+using namespace cairn::sim;
+constexpr double kPi = std::numbers::pi;
+const std::string kPeopleData = std::string(CAIRN_SOURCE_ROOT) + "/test/data/people/";
+
+TEST(Legs, GeometryFollowsGait) {
+  const GaitConfig g;
+  Vec2 legs[2];
+  // standing: legs side by side, hip_half_width left/right of the heading (here +y)
+  legPositions(g, {1, 1}, kPi / 2, 0.0, 1.0, legs);
+  EXPECT_NEAR(legs[0].x, 1 - g.hip_half_width, 1e-12);
+  EXPECT_NEAR(legs[1].x, 1 + g.hip_half_width, 1e-12);
+  EXPECT_NEAR(legs[0].y, 1.0, 1e-12);
+  // walking at full swing speed, phase pi/2: left leg forward by the amplitude, right leg back
+  legPositions(g, {0, 0}, 0.0, 1.2, kPi / 2, legs);
+  EXPECT_NEAR(legs[0].x, g.swing_amplitude, 1e-12);
+  EXPECT_NEAR(legs[1].x, -g.swing_amplitude, 1e-12);
+  EXPECT_NEAR(norm(legs[0] - legs[1]), 2 * std::hypot(g.hip_half_width, g.swing_amplitude), 1e-12);
+  // half speed: half amplitude; the midpoint of the legs is always the person's position
+  legPositions(g, {3, -2}, 0.7, 0.5, 0.3, legs);
+  EXPECT_NEAR(0.5 * (legs[0].x + legs[1].x), 3.0, 1e-12);
+  EXPECT_NEAR(0.5 * (legs[0].y + legs[1].y), -2.0, 1e-12);
+}
+
+TEST(Trajectories, CsvFormatAndErrors) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "cairn_sim_test_people";
+  fs::create_directories(dir);
+  {
+    std::ofstream f(dir / "ok.csv");
+    f << "t,id,x,y\n# comment\n0.0,7,1.0,2.0\n1.0,7,2.0,2.0\n0.5,3,0,0\n2.0,7,2.0,4.0\n";
+  }
+  const auto trajs = loadTrajectoriesCsv((dir / "ok.csv").string());
+  ASSERT_EQ(trajs.size(), 2u);
+  EXPECT_EQ(trajs[1].id, 7);
+  ASSERT_EQ(trajs[1].t.size(), 3u);
+  Vec2 p, v;
+  trajs[1].sample(1.5, p, v);
+  EXPECT_NEAR(p.x, 2.0, 1e-12);
+  EXPECT_NEAR(p.y, 3.0, 1e-12);
+  EXPECT_NEAR(v.y, 2.0, 1e-12);
+  {
+    std::ofstream f(dir / "bad.csv");
+    f << "t,id,x,y\n0,1,0,0\n1,1,zero,0\n";
+  }
+  try {
+    loadTrajectoriesCsv((dir / "bad.csv").string());
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 3);
+  }
+}
+
+TEST(Trajectories, EthObsmatExcerpt) {
+  const auto trajs = loadEthObsmat(kPeopleData + "eth_seq_eth_obsmat_head400.txt");
+  EXPECT_EQ(trajs.size(), 20u);
+  // first row: frame 780, ped 1, x 8.4568443, y 3.5880664; ETH annotations every 0.4 s (6 frames)
+  const Trajectory& t1 = trajs.front();
+  EXPECT_EQ(t1.id, 1);
+  EXPECT_NEAR(t1.t.front(), 780 * 0.4 / 6, 1e-9);
+  EXPECT_NEAR(t1.p.front().x, 8.4568443, 1e-9);
+  EXPECT_NEAR(t1.p.front().y, 3.5880664, 1e-9);
+  EXPECT_NEAR(t1.t[1] - t1.t[0], 0.4, 1e-9);
+  // the recorded speed of pedestrian 1 at the first sample is (1.67, 0.18) m/s (obsmat v_x, v_y)
+  Vec2 p, v;
+  t1.sample(t1.t[0] + 0.2, p, v);
+  EXPECT_NEAR(v.x, 1.67, 0.1);
+}
+
+TEST(Trajectories, EdinburghExcerpt) {
+  const auto trajs = loadEdinburghTracks(kPeopleData + "edinburgh_tracks_01Aug_head12.txt");
+  ASSERT_EQ(trajs.size(), 5u);
+  // TRACK.R1 starts [601 23 4471]
+  EXPECT_EQ(trajs[0].id, 1);
+  EXPECT_NEAR(trajs[0].p.front().x, 601 * 0.0247, 1e-9);
+  EXPECT_NEAR(trajs[0].t.front(), 4471 / 9.0, 1e-9);
+  EXPECT_EQ(trajs[0].t.size(), 53u);  // Properties.R1: 53 points
+}
+
+TEST(Trajectories, TransformOffsetScale) {
+  std::vector<Trajectory> t{{1, {0.0}, {{1.0, 0.0}}}};
+  transformTrajectories(t, {10, 0, kPi / 2}, 2.0, 5.0);
+  EXPECT_NEAR(t[0].p[0].x, 10.0, 1e-12);
+  EXPECT_NEAR(t[0].p[0].y, 2.0, 1e-12);
+  EXPECT_DOUBLE_EQ(t[0].t[0], 5.0);
+}
+
+TEST(FreeSpace, AStarFindsAPathThroughTheDoorGap) {
+  // two rooms separated by a wall at x = 5 with a 1 m gap at y in [4, 5]
+  const World w = parseWorld(
+      "walls:\n  - [[0,0],[10,0],[10,10],[0,10],[0,0]]\n  - [[5,0],[5,4]]\n  - [[5,5],[5,10]]\n"
+      "regions: [{name: a, rect: [0,0,5,10]}, {name: b, rect: [5,0,10,10]}]\n",
+      "t.yaml");
+  const FreeSpaceGrid grid(w, 0.1, 0.3);
+  const auto path = grid.plan({2, 1}, {8, 1});
+  ASSERT_GE(path.size(), 3u);
+  bool through_gap = false;
+  double length = 0;
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    length += norm(path[i] - path[i - 1]);
+    const Vec2 a = path[i - 1], b = path[i];
+    if ((a.x - 5) * (b.x - 5) <= 0) {
+      const double y = a.y + (b.y - a.y) * (5 - a.x) / (b.x - a.x);
+      through_gap = y > 4.2 && y < 4.8;
+    }
+  }
+  EXPECT_TRUE(through_gap);
+  EXPECT_LT(length, 2 * std::hypot(3.0, 3.5) + 0.5);  // close to the shortest path via the gap
+  EXPECT_TRUE(grid.plan({2, 1}, {5, 2}).empty());     // goal inside the wall clearance
+}
+
+TEST(PeopleSimulator, ScriptedWalkerAndRecordedTrajectory) {
+  const World w = parseWorld(
+      "walls: [[[-20,-20],[20,-20],[20,20],[-20,20],[-20,-20]]]\n"
+      "people:\n  - {kind: scripted, waypoints: [[0,0],[4,0]], speed: 1.0, start_time: 1.0}\n",
+      "t.yaml");
+  PeopleSimulator ps(w, GaitConfig{}, Rng(1));
+  ps.update(0.5);
+  EXPECT_TRUE(ps.people().empty());  // not yet started
+  ps.update(1.0);
+  ps.update(3.0);
+  ASSERT_EQ(ps.people().size(), 1u);
+  EXPECT_NEAR(ps.people()[0].position.x, 2.0, 1e-9);
+  ps.update(7.0);  // 4 m out, 2 m back (loop closes to the first waypoint)
+  EXPECT_NEAR(ps.people()[0].position.x, 2.0, 1e-9);
+  EXPECT_NEAR(std::abs(ps.people()[0].heading), kPi, 1e-9);
+  std::vector<Circle> legs;
+  ps.legCircles(legs);
+  ASSERT_EQ(legs.size(), 2u);
+  EXPECT_NEAR(norm(0.5 * (legs[0].center + legs[1].center) - ps.people()[0].position), 0.0, 1e-12);
+
+  ps.addTrajectories({{99, {10.0, 12.0}, {{0, 5}, {2, 5}}}}, false);
+  ps.update(11.0);
+  ASSERT_EQ(ps.people().size(), 2u);
+  EXPECT_NEAR(ps.people()[1].position.x, 1.0, 1e-12);
+  EXPECT_NEAR(ps.people()[1].velocity.x, 1.0, 1e-12);
+  ps.update(12.5);
+  EXPECT_EQ(ps.people().size(), 1u);  // trajectory over
+}
+
+TEST(PeopleSimulator, CrowdRatesFollowTimeOfDay) {
+  // One source, one sink; the rate peaks at noon and is zero at midnight (amplitude 1).
+  const World w = parseWorld(
+      "walls: [[[0,0],[20,0],[20,10],[0,10],[0,0]]]\n"
+      "regions: [{name: door, rect: [0.5,0.5,2,9.5]}, {name: sink, rect: [18,0.5,19.5,9.5]}]\n"
+      "crowd: {sources: [door], sinks: [sink], base_rate: 60, terms: [{period: 86400, amplitude: 1.0, phase: 43200}],"
+      " speed: 1.2, max_people: 1000}\n",
+      "t.yaml");
+  EXPECT_NEAR(w.crowd->rateAt(43200) * 3600, 120.0, 1e-9);
+  EXPECT_NEAR(w.crowd->rateAt(0) * 3600, 0.0, 1e-9);
+  PeopleSimulator ps(w, GaitConfig{}, Rng(11));
+  ps.update(0.0);
+  int night = 0, noon = 0;
+  // two one-hour windows: 00:00-01:00 (expected ~1 arrival) and 11:30-12:30 (expected ~120)
+  for (double t = 1.0; t <= 3600.0; t += 1.0) ps.update(t);
+  night = ps.spawnedCrowd();
+  PeopleSimulator ps2(w, GaitConfig{}, Rng(11));
+  ps2.update(41400.0);
+  for (double t = 41401.0; t <= 45000.0; t += 1.0) {
+    ps2.update(t);
+    for (const auto& p : ps2.people()) {
+      ASSERT_GT(p.position.x, 0.3);
+      ASSERT_LT(p.position.x, 19.7);
+    }
+  }
+  noon = ps2.spawnedCrowd();
+  EXPECT_LE(night, 5);
+  EXPECT_GT(noon, 90);
+  EXPECT_LT(noon, 150);
+}
