@@ -1,0 +1,94 @@
+// Multi-person tracker: one EKF with a constant-velocity model per person (Stüde §2.1.3 after [LGA15]),
+// association by global nearest neighbour (Hungarian on Mahalanobis costs with chi-square gating) or by JPDA,
+// logic-based initiation/confirmation/deletion. Tracks live in the odom (or map) frame: each scan's detections
+// are transformed with the sensor pose at the scan stamp, which compensates the robot's own motion.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "cairn/people_tracking/detector.hpp"
+#include "cairn/people_tracking/scan.hpp"
+
+namespace cairn::people_tracking {
+
+enum class Association { kGnn, kJpda };
+const char* toString(Association a);
+Association associationFromString(const std::string& s);  // "gnn" | "jpda"; throws InputError
+
+struct TrackerParams {
+  Association association = Association::kGnn;
+  // Constant-velocity model, x = [px py vx vy]; continuous white-noise acceleration with spectral density
+  // process_noise (m^2/s^3): Q = q [dt^3/3 I, dt^2/2 I; dt^2/2 I, dt I].
+  double process_noise = 0.6;
+  double initial_velocity_sigma = 0.8;  // m/s, velocity std of a new track
+  double gate_chi2 = 9.21;              // 99 % gate, chi-square with 2 dof
+  int confirm_hits = 3;                 // tentative -> confirmed after this many associated scans
+  double tentative_timeout = 0.4;       // s without an update deletes a tentative track
+  double delete_timeout = 1.5;          // s without an update deletes a confirmed track
+  double max_position_sigma = 1.5;      // m, tracks whose position std grows beyond this are deleted
+  double min_init_distance = 0.45;      // m, no new track this close to an existing confirmed track
+  double min_detection_confidence = 0.0;
+  double max_dt = 2.0;                  // s, larger forward jumps reset the tracker
+  double confidence_gain = 0.3;         // confidence <- confidence + gain * (hit - confidence)
+  // JPDA
+  double detection_probability = 0.9;
+  double clutter_density = 0.02;  // false detections per m^2 (within the gates)
+  int jpda_max_events = 20000;    // larger gating clusters fall back to GNN
+};
+
+struct Track {
+  int id = 0;
+  Eigen::Vector4d state = Eigen::Vector4d::Zero();           // px py vx vy (tracking frame)
+  Eigen::Matrix4d covariance = Eigen::Matrix4d::Identity();  // of state
+  double stamp = 0.0;        // time of the state
+  double first_stamp = 0.0;  // initiation time
+  double last_update = 0.0;  // last associated detection
+  int hits = 0;
+  bool confirmed = false;
+  double confidence = 0.0;       // [0, 1], moving average of association success
+  double leg_separation = 0.0;   // m, moving average from paired-leg detections (0 if never paired)
+
+  [[nodiscard]] Eigen::Vector2d position() const { return state.head<2>(); }
+  [[nodiscard]] Eigen::Vector2d velocity() const { return state.tail<2>(); }
+  [[nodiscard]] Eigen::Matrix2d positionCovariance() const { return covariance.topLeftCorner<2, 2>(); }
+  [[nodiscard]] double age() const { return stamp - first_stamp; }
+};
+
+struct TrackerStatus {
+  bool reset = false;  // the tracker dropped all tracks before processing this input
+  std::string reason;  // why ("time went backwards", "time jump of N s")
+};
+
+class PeopleTracker {
+ public:
+  explicit PeopleTracker(TrackerParams params = {});
+
+  // Detections in the sensor frame; sensor_pose is the sensor in the tracking frame at `stamp`.
+  TrackerStatus update(double stamp, const std::vector<PersonDetection>& detections, const Pose2& sensor_pose);
+  // Detections already in the tracking frame.
+  TrackerStatus updateInFrame(double stamp, const std::vector<PersonDetection>& detections);
+
+  [[nodiscard]] const std::vector<Track>& tracks() const { return tracks_; }  // tentative and confirmed
+  [[nodiscard]] std::vector<Track> confirmedTracks() const;
+  [[nodiscard]] const TrackerParams& params() const { return params_; }
+  void reset();
+
+ private:
+  void predict(double stamp);
+  void associateGnn(const std::vector<PersonDetection>& dets, std::vector<bool>& det_used, bool confirmed_stage);
+  void associateJpda(const std::vector<PersonDetection>& dets, std::vector<bool>& det_used);
+  void applyUpdate(Track& t, const PersonDetection& d);
+  void initiate(const std::vector<PersonDetection>& dets, const std::vector<bool>& det_used);
+  void prune();
+
+  TrackerParams params_;
+  std::vector<Track> tracks_;
+  std::vector<bool> updated_;  // per track, associated in the current scan
+  double last_stamp_ = 0.0;
+  bool has_stamp_ = false;
+  int next_id_ = 1;
+};
+
+}  // namespace cairn::people_tracking

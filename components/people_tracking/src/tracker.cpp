@@ -1,0 +1,312 @@
+#include "cairn/people_tracking/tracker.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numeric>
+
+#include "cairn/people_tracking/assignment.hpp"
+
+namespace cairn::people_tracking {
+
+const char* toString(Association a) { return a == Association::kGnn ? "gnn" : "jpda"; }
+
+Association associationFromString(const std::string& s) {
+  if (s == "gnn") return Association::kGnn;
+  if (s == "jpda") return Association::kJpda;
+  throw InputError("unknown association '" + s + "' (gnn|jpda)");
+}
+
+PeopleTracker::PeopleTracker(TrackerParams params) : params_(params) {}
+
+void PeopleTracker::reset() {
+  tracks_.clear();
+  has_stamp_ = false;
+}
+
+std::vector<Track> PeopleTracker::confirmedTracks() const {
+  std::vector<Track> out;
+  for (const auto& t : tracks_)
+    if (t.confirmed) out.push_back(t);
+  return out;
+}
+
+TrackerStatus PeopleTracker::update(double stamp, const std::vector<PersonDetection>& detections,
+                                    const Pose2& sensor_pose) {
+  std::vector<PersonDetection> in_frame = detections;
+  const Eigen::Matrix2d R = sensor_pose.rotation();
+  for (auto& d : in_frame) {
+    d.position = sensor_pose.transform(d.position);
+    d.covariance = R * d.covariance * R.transpose();
+  }
+  return updateInFrame(stamp, in_frame);
+}
+
+namespace {
+struct Innovation {
+  Eigen::Vector2d nu;
+  Eigen::Matrix2d S;
+  double d2 = 0.0;
+};
+Innovation innovation(const Track& t, const PersonDetection& d) {
+  Innovation in;
+  in.nu = d.position - t.state.head<2>();
+  in.S = t.covariance.topLeftCorner<2, 2>() + d.covariance;
+  in.d2 = in.nu.dot(in.S.ldlt().solve(in.nu));
+  return in;
+}
+}  // namespace
+
+TrackerStatus PeopleTracker::updateInFrame(double stamp, const std::vector<PersonDetection>& detections) {
+  TrackerStatus status;
+  if (!std::isfinite(stamp)) throw InputError("tracker update with a non-finite stamp");
+  if (has_stamp_ && stamp < last_stamp_) {
+    status.reset = true;
+    status.reason = "time went backwards by " + std::to_string(last_stamp_ - stamp) + " s";
+  } else if (has_stamp_ && stamp - last_stamp_ > params_.max_dt) {
+    status.reset = true;
+    status.reason = "time jump of " + std::to_string(stamp - last_stamp_) + " s";
+  }
+  if (status.reset) reset();
+  std::vector<PersonDetection> dets;
+  for (const auto& d : detections)
+    if (d.confidence >= params_.min_detection_confidence && d.position.allFinite() && d.covariance.allFinite())
+      dets.push_back(d);
+
+  predict(stamp);
+  last_stamp_ = stamp;
+  has_stamp_ = true;
+  updated_.assign(tracks_.size(), false);
+  std::vector<bool> used(dets.size(), false);
+  if (params_.association == Association::kGnn) {
+    associateGnn(dets, used, true);   // confirmed tracks first: tentative ones cannot steal their detections
+    associateGnn(dets, used, false);
+  } else {
+    associateJpda(dets, used);
+  }
+  for (std::size_t i = 0; i < tracks_.size(); ++i) {
+    Track& t = tracks_[i];
+    t.confidence += params_.confidence_gain * ((updated_[i] ? 1.0 : 0.0) - t.confidence);
+    if (updated_[i] && !t.confirmed && t.hits >= params_.confirm_hits) t.confirmed = true;
+  }
+  initiate(dets, used);
+  prune();
+  return status;
+}
+
+void PeopleTracker::predict(double stamp) {
+  for (Track& t : tracks_) {
+    const double dt = stamp - t.stamp;
+    if (dt <= 0.0) continue;
+    Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
+    F(0, 2) = F(1, 3) = dt;
+    const double q = params_.process_noise;
+    Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
+    const double a = q * dt * dt * dt / 3.0, b = q * dt * dt / 2.0, c = q * dt;
+    Q(0, 0) = Q(1, 1) = a;
+    Q(0, 2) = Q(2, 0) = Q(1, 3) = Q(3, 1) = b;
+    Q(2, 2) = Q(3, 3) = c;
+    t.state = F * t.state;
+    t.covariance = F * t.covariance * F.transpose() + Q;
+    t.stamp = stamp;
+  }
+}
+
+void PeopleTracker::applyUpdate(Track& t, const PersonDetection& d) {
+  const Innovation in = innovation(t, d);
+  const Eigen::Matrix<double, 4, 2> K = t.covariance.leftCols<2>() * in.S.inverse();
+  t.state += K * in.nu;
+  Eigen::Matrix<double, 2, 4> H = Eigen::Matrix<double, 2, 4>::Zero();
+  H(0, 0) = H(1, 1) = 1.0;
+  const Eigen::Matrix4d IKH = Eigen::Matrix4d::Identity() - K * H;
+  t.covariance = IKH * t.covariance * IKH.transpose() + K * d.covariance * K.transpose();  // Joseph form
+  t.last_update = t.stamp;
+  ++t.hits;
+  if (d.legs == 2 && d.leg_separation > 0.0)
+    t.leg_separation = t.leg_separation > 0.0 ? 0.8 * t.leg_separation + 0.2 * d.leg_separation : d.leg_separation;
+}
+
+void PeopleTracker::associateGnn(const std::vector<PersonDetection>& dets, std::vector<bool>& used,
+                                 bool confirmed_stage) {
+  std::vector<std::size_t> rows, cols;
+  for (std::size_t i = 0; i < tracks_.size(); ++i)
+    if (tracks_[i].confirmed == confirmed_stage && !updated_[i]) rows.push_back(i);
+  for (std::size_t j = 0; j < dets.size(); ++j)
+    if (!used[j]) cols.push_back(j);
+  if (rows.empty() || cols.empty()) return;
+  constexpr double kForbidden = 1e9;
+  Eigen::MatrixXd cost(static_cast<long>(rows.size()), static_cast<long>(cols.size()));
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      const Innovation in = innovation(tracks_[rows[r]], dets[cols[c]]);
+      // Mahalanobis distance plus the log-determinant: the negative log-likelihood up to a constant.
+      cost(static_cast<long>(r), static_cast<long>(c)) =
+          in.d2 <= params_.gate_chi2 ? in.d2 + std::log(in.S.determinant()) : kForbidden;
+    }
+  const std::vector<int> match = solveAssignment(cost, kForbidden);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    if (match[r] < 0) continue;
+    const std::size_t j = cols[static_cast<std::size_t>(match[r])];
+    applyUpdate(tracks_[rows[r]], dets[j]);
+    updated_[rows[r]] = true;
+    used[j] = true;
+  }
+}
+
+// JPDA (Bar-Shalom & Fortmann): joint association events are enumerated per gating cluster; each track is
+// updated with the probability-weighted innovation and the spread-of-innovations covariance term.
+void PeopleTracker::associateJpda(const std::vector<PersonDetection>& dets, std::vector<bool>& used) {
+  const std::size_t nt = tracks_.size(), nd = dets.size();
+  if (nt == 0 || nd == 0) return;
+  std::vector<std::vector<Innovation>> inn(nt, std::vector<Innovation>(nd));
+  std::vector<std::vector<std::size_t>> gated(nt);
+  for (std::size_t i = 0; i < nt; ++i)
+    for (std::size_t j = 0; j < nd; ++j) {
+      inn[i][j] = innovation(tracks_[i], dets[j]);
+      if (inn[i][j].d2 <= params_.gate_chi2) gated[i].push_back(j);
+    }
+  // Gating clusters: union-find over tracks sharing a detection.
+  std::vector<std::size_t> parent(nt);
+  std::iota(parent.begin(), parent.end(), 0);
+  std::function<std::size_t(std::size_t)> find = [&](std::size_t x) {
+    return parent[x] == x ? x : parent[x] = find(parent[x]);
+  };
+  std::vector<long> owner(nd, -1);
+  for (std::size_t i = 0; i < nt; ++i)
+    for (std::size_t j : gated[i]) {
+      if (owner[j] < 0) owner[j] = static_cast<long>(i);
+      else parent[find(i)] = find(static_cast<std::size_t>(owner[j]));
+    }
+  const double pd = params_.detection_probability;
+  const double lambda = std::max(1e-9, params_.clutter_density);
+  std::vector<double> det_mass(nd, 0.0);
+  for (std::size_t root = 0; root < nt; ++root) {
+    std::vector<std::size_t> members;
+    for (std::size_t i = 0; i < nt; ++i)
+      if (find(i) == root && !gated[i].empty()) members.push_back(i);
+    if (members.empty()) continue;
+    double events = 1.0;
+    for (std::size_t i : members) events *= static_cast<double>(gated[i].size() + 1);
+    if (events > params_.jpda_max_events) {
+      // Too many joint events: GNN inside this cluster.
+      std::vector<bool> keep(nt);
+      for (std::size_t i = 0; i < nt; ++i) keep[i] = updated_[i];
+      for (std::size_t i = 0; i < nt; ++i) updated_[i] = updated_[i] || std::find(members.begin(), members.end(), i) == members.end();
+      associateGnn(dets, used, true);
+      associateGnn(dets, used, false);
+      for (std::size_t i = 0; i < nt; ++i)
+        if (std::find(members.begin(), members.end(), i) == members.end()) updated_[i] = keep[i];
+      continue;
+    }
+    // Likelihood of track i taking detection j relative to clutter: pd * N(nu; 0, S) / lambda.
+    std::vector<std::vector<double>> g(members.size());
+    for (std::size_t m = 0; m < members.size(); ++m)
+      for (std::size_t j : gated[members[m]]) {
+        const Innovation& in = inn[members[m]][j];
+        const double norm = 2.0 * M_PI * std::sqrt(in.S.determinant());
+        g[m].push_back(pd * std::exp(-0.5 * in.d2) / norm / lambda);
+      }
+    std::vector<std::vector<double>> beta(members.size());
+    std::vector<double> beta0(members.size(), 0.0);
+    for (std::size_t m = 0; m < members.size(); ++m) beta[m].assign(gated[members[m]].size(), 0.0);
+    double total = 0.0;
+    std::vector<int> choice(members.size(), -1);
+    std::vector<char> taken(nd, 0);
+    const double miss = 1.0 - pd;
+    std::function<void(std::size_t, double)> enumerate = [&](std::size_t m, double w) {
+      if (m == members.size()) {
+        total += w;
+        for (std::size_t k = 0; k < members.size(); ++k) {
+          if (choice[k] < 0) beta0[k] += w;
+          else beta[k][static_cast<std::size_t>(choice[k])] += w;
+        }
+        return;
+      }
+      choice[m] = -1;
+      enumerate(m + 1, w * miss);
+      for (std::size_t k = 0; k < gated[members[m]].size(); ++k) {
+        const std::size_t j = gated[members[m]][k];
+        if (taken[j]) continue;
+        taken[j] = 1;
+        choice[m] = static_cast<int>(k);
+        enumerate(m + 1, w * g[m][k]);
+        taken[j] = 0;
+      }
+      choice[m] = -1;
+    };
+    enumerate(0, 1.0);
+    if (total <= 0.0) continue;
+    for (std::size_t m = 0; m < members.size(); ++m) {
+      Track& t = tracks_[members[m]];
+      const double b0 = beta0[m] / total;
+      Eigen::Vector2d nu = Eigen::Vector2d::Zero();
+      Eigen::Matrix2d spread = Eigen::Matrix2d::Zero();
+      double best = -1.0;
+      std::size_t best_j = 0;
+      for (std::size_t k = 0; k < gated[members[m]].size(); ++k) {
+        const std::size_t j = gated[members[m]][k];
+        const double b = beta[m][k] / total;
+        det_mass[j] += b;
+        nu += b * inn[members[m]][j].nu;
+        spread += b * inn[members[m]][j].nu * inn[members[m]][j].nu.transpose();
+        if (b > best) best = b, best_j = j;
+      }
+      if (b0 > 0.5) continue;  // most likely missed: keep the prediction (deletion logic sees no update)
+      // Combined update. The measurement covariance of the most likely detection stands in for all of them.
+      const PersonDetection& d = dets[best_j];
+      const Eigen::Matrix2d S = t.covariance.topLeftCorner<2, 2>() + d.covariance;
+      const Eigen::Matrix<double, 4, 2> K = t.covariance.leftCols<2>() * S.inverse();
+      const Eigen::Matrix4d Pc = t.covariance - K * S * K.transpose();
+      t.state += K * nu;
+      t.covariance = b0 * t.covariance + (1.0 - b0) * Pc + K * (spread - nu * nu.transpose()) * K.transpose();
+      t.last_update = t.stamp;
+      ++t.hits;
+      if (d.legs == 2 && d.leg_separation > 0.0)
+        t.leg_separation = t.leg_separation > 0.0 ? 0.8 * t.leg_separation + 0.2 * d.leg_separation : d.leg_separation;
+      updated_[members[m]] = true;
+    }
+  }
+  for (std::size_t j = 0; j < nd; ++j)
+    if (det_mass[j] >= 0.5) used[j] = true;
+  // Detections gated by some track but mostly explained as clutter stay available for initiation only if they
+  // are not next to a confirmed track (checked in initiate()).
+}
+
+void PeopleTracker::initiate(const std::vector<PersonDetection>& dets, const std::vector<bool>& used) {
+  for (std::size_t j = 0; j < dets.size(); ++j) {
+    if (used[j]) continue;
+    bool near = false;
+    for (const Track& t : tracks_)
+      near |= t.confirmed && (t.position() - dets[j].position).norm() < params_.min_init_distance;
+    for (const Track& t : tracks_)  // also do not start two tracks on one spot in the same scan
+      near |= t.first_stamp == last_stamp_ && t.hits == 1 && (t.position() - dets[j].position).norm() < params_.min_init_distance;
+    if (near) continue;
+    Track t;
+    t.id = next_id_++;
+    t.state << dets[j].position, 0.0, 0.0;
+    t.covariance.setZero();
+    t.covariance.topLeftCorner<2, 2>() = dets[j].covariance;
+    const double v2 = params_.initial_velocity_sigma * params_.initial_velocity_sigma;
+    t.covariance(2, 2) = t.covariance(3, 3) = v2;
+    t.stamp = t.first_stamp = t.last_update = last_stamp_;
+    t.hits = 1;
+    t.confirmed = params_.confirm_hits <= 1;
+    t.confidence = params_.confidence_gain;
+    t.leg_separation = dets[j].legs == 2 ? dets[j].leg_separation : 0.0;
+    tracks_.push_back(t);
+  }
+}
+
+void PeopleTracker::prune() {
+  std::erase_if(tracks_, [&](const Track& t) {
+    const double since = last_stamp_ - t.last_update;
+    if (!t.confirmed && since > params_.tentative_timeout) return true;
+    if (t.confirmed && since > params_.delete_timeout) return true;
+    const double max_var = t.positionCovariance().diagonal().maxCoeff();
+    return max_var > params_.max_position_sigma * params_.max_position_sigma;
+  });
+}
+
+}  // namespace cairn::people_tracking
