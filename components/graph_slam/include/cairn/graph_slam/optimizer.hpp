@@ -1,0 +1,92 @@
+// Nonlinear least-squares optimizer for PoseGraph (Stüde eq. 3.5: x* = argmin sum rho(e^T Omega e)):
+// Gauss-Newton, Levenberg-Marquardt (Nielsen damping update, step rejection) and Powell's dogleg on a
+// block-sparse Hessian factorized with CHOLMOD. The pattern, block AMD ordering and symbolic factorization are
+// cached per graph structure (PoseGraph::structureVersion()), so re-optimizing after value changes or
+// warm-starting only refactorizes numerically.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "cairn/graph_slam/pose_graph.hpp"
+
+namespace cairn::graph_slam {
+
+enum class Algorithm { kLevenbergMarquardt, kGaussNewton, kDogleg };
+
+/// Parses "lm", "gn", "dogleg"; throws std::invalid_argument.
+Algorithm parseAlgorithm(const std::string& name);
+
+struct OptimizerOptions {
+  Algorithm algorithm = Algorithm::kLevenbergMarquardt;
+  int max_iterations = 100;
+  /// Stop when an accepted step lowers the objective by less than this fraction.
+  double function_tolerance = 1e-10;
+  /// Stop when max |gradient| falls below this.
+  double gradient_tolerance = 1e-12;
+  /// Stop when |step| <= parameter_tolerance * (|x| + parameter_tolerance).
+  double parameter_tolerance = 1e-10;
+  /// LM: initial damping lambda; the damping matrix is lambda * diag(H) (Marquardt scaling, clamped).
+  double initial_lambda = 1e-4;
+  /// Dogleg: initial trust-region radius.
+  double initial_radius = 1e4;
+  /// Threads for linearization / cost evaluation (>= 1).
+  int num_threads = 2;
+  /// Reuse the last LM damping / dogleg radius when optimizing the same structure again (incremental use).
+  bool warm_start_damping = false;
+};
+
+struct OptimizerSummary {
+  std::size_t variables = 0;
+  std::size_t factors = 0;
+  double initial_chi2 = 0.0;  ///< sum e^T Omega e before (Stüde eq. 3.4)
+  double final_chi2 = 0.0;
+  double initial_cost = 0.0;  ///< sum rho(weight * e^T Omega e) before (equals chi2 without kernels)
+  double final_cost = 0.0;
+  int iterations = 0;         ///< linear solves (accepted and rejected steps)
+  int accepted_steps = 0;
+  bool converged = false;
+  std::string termination;
+  double time_s = 0.0;
+  bool structure_rebuilt = false;      ///< this call rebuilt pattern + symbolic analysis
+  int symbolic_analyses = 0;           ///< cumulative over the optimizer's life
+  int numeric_factorizations = 0;      ///< cumulative over the optimizer's life
+  std::optional<VariableId> gauge;     ///< variable held fixed automatically (nothing fixed, no priors)
+};
+
+class Optimizer {
+ public:
+  explicit Optimizer(OptimizerOptions options = {});
+  ~Optimizer();
+  Optimizer(Optimizer&&) noexcept;
+  Optimizer& operator=(Optimizer&&) noexcept;
+
+  const OptimizerOptions& options() const { return options_; }
+  OptimizerOptions& options() { return options_; }
+
+  /// Optimizes the graph's values in place, starting from the current values.
+  OptimizerSummary optimize(PoseGraph& graph);
+
+  /// Marginal covariances (in the tangent space of geometry.hpp's retract) of the given variables at the
+  /// current values, from the sparse Cholesky factor of the Hessian (Stüde eq. 3.8 uses these for the
+  /// loop-closure search radius). Fixed / gauge variables get zero matrices. Throws std::runtime_error if the
+  /// Hessian is singular.
+  std::vector<Eigen::MatrixXd> marginalCovariances(const PoseGraph& graph, std::span<const VariableId> ids);
+
+ private:
+  struct Impl;
+  OptimizerOptions options_;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// The variable the optimizer holds fixed to remove the gauge freedom: the first pose, when no variable is
+/// fixed and no prior factor exists; otherwise none.
+std::optional<std::size_t> automaticGauge(const PoseGraph& graph);
+
+}  // namespace cairn::graph_slam

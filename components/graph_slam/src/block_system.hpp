@@ -1,0 +1,53 @@
+// Block-sparse normal equations of a pose graph, assembled directly into a CHOLMOD matrix whose pattern,
+// fill-reducing (block AMD) ordering and symbolic factorization are built once per graph structure.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "cairn/graph_slam/pose_graph.hpp"
+#include "sparse_cholesky.hpp"
+
+namespace cairn::graph_slam::detail {
+
+struct FactorSlots {
+  int off[2] = {-1, -1};       ///< scalar offset of each variable in the (permuted) system, -1 if inactive
+  int diag_rel[2] = {0, 0};    ///< position of the diagonal block inside its columns' row lists
+  int pair_rel = -1;           ///< position of the off-diagonal upper block inside its columns, -1 if none
+  bool first_is_row = true;    ///< the upper off-diagonal block is (var0 rows, var1 cols)
+};
+
+class BlockSystem {
+ public:
+  /// Builds pattern, block AMD ordering and symbolic factorization. gauge: a variable index treated as fixed.
+  void build(const PoseGraph& graph, std::optional<std::size_t> gauge);
+
+  int size() const { return n_; }
+  /// Scalar offset of variable v in the system, or -1 if it is fixed / the gauge.
+  int offset(std::size_t v) const { return var_offset_[v]; }
+  const std::vector<int>& diagIndex() const { return diag_index_; }
+  SparseCholesky& cholesky() { return chol_; }
+
+  /// Assembles H = sum w J^T Omega J (into cholesky().values()) and g = sum w J^T Omega e with the IRLS weight
+  /// w = weight * rho'(s). Returns the objective sum rho(weight * e^T Omega e); *chi2 gets sum e^T Omega e.
+  double linearize(const PoseGraph& graph, const std::vector<Variable>& values, Eigen::VectorXd& grad,
+                   int threads, double* chi2);
+  /// Objective and chi2 only.
+  double evaluate(const PoseGraph& graph, const std::vector<Variable>& values, int threads, double* chi2) const;
+  /// values <- values boxplus step (fixed variables untouched).
+  void retract(const std::vector<Variable>& values, const Eigen::VectorXd& step, std::vector<Variable>& out) const;
+
+ private:
+  int n_ = 0;
+  std::vector<int> var_offset_;
+  std::vector<FactorSlots> slots_;
+  std::vector<int> diag_index_;
+  std::vector<std::vector<double>> thread_h_;
+  std::vector<Eigen::VectorXd> thread_g_;
+  SparseCholesky chol_;
+};
+
+}  // namespace cairn::graph_slam::detail

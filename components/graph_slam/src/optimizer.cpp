@@ -1,0 +1,333 @@
+#include "cairn/graph_slam/optimizer.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "block_system.hpp"
+
+namespace cairn::graph_slam {
+
+Algorithm parseAlgorithm(const std::string& name) {
+  if (name == "lm") return Algorithm::kLevenbergMarquardt;
+  if (name == "gn") return Algorithm::kGaussNewton;
+  if (name == "dogleg") return Algorithm::kDogleg;
+  throw std::invalid_argument("unknown solver '" + name + "' (expected lm, gn or dogleg)");
+}
+
+std::optional<std::size_t> automaticGauge(const PoseGraph& graph) {
+  for (const Variable& v : graph.variables()) {
+    if (v.fixed) return std::nullopt;
+  }
+  for (const Factor& f : graph.factors()) {
+    if (arity(f.kind) == 1) return std::nullopt;
+  }
+  const auto& vars = graph.variables();
+  for (std::size_t k = 0; k < vars.size(); ++k) {
+    if (vars[k].kind == VariableKind::kPose2 || vars[k].kind == VariableKind::kPose3) return k;
+  }
+  return std::nullopt;
+}
+
+struct Optimizer::Impl {
+  detail::BlockSystem system;
+  std::uint64_t built_version = 0;
+  bool built = false;
+  std::optional<std::size_t> gauge;
+  int symbolic_total = 0;
+  int numeric_total = 0;
+  double last_lambda = -1.0;
+  double last_radius = -1.0;
+
+  bool ensureStructure(const PoseGraph& graph) {
+    if (built && built_version == graph.structureVersion()) return false;
+    gauge = automaticGauge(graph);
+    const int before = system.cholesky().symbolicAnalyses();
+    system.build(graph, gauge);
+    symbolic_total += system.cholesky().symbolicAnalyses() - before;
+    built_version = graph.structureVersion();
+    built = true;
+    return true;
+  }
+
+  bool factorize() {
+    ++numeric_total;
+    return system.cholesky().factorize();
+  }
+};
+
+Optimizer::Optimizer(OptimizerOptions options) : options_(options), impl_(std::make_unique<Impl>()) {}
+Optimizer::~Optimizer() = default;
+Optimizer::Optimizer(Optimizer&&) noexcept = default;
+Optimizer& Optimizer::operator=(Optimizer&&) noexcept = default;
+
+namespace {
+
+double stateNorm(const std::vector<Variable>& values) {
+  double s = 0.0;
+  for (const Variable& v : values) {
+    switch (v.kind) {
+      case VariableKind::kPose2: s += v.pose2.t.squaredNorm() + v.pose2.theta * v.pose2.theta; break;
+      case VariableKind::kPose3: s += v.pose3.t.squaredNorm() + v.pose3.q.coeffs().squaredNorm(); break;
+      case VariableKind::kPoint2:
+      case VariableKind::kPoint3: s += v.point.squaredNorm(); break;
+    }
+  }
+  return std::sqrt(s);
+}
+
+}  // namespace
+
+OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Impl& im = *impl_;
+  OptimizerSummary sum;
+  sum.variables = graph.variables().size();
+  sum.factors = graph.factors().size();
+  sum.structure_rebuilt = im.ensureStructure(graph);
+  if (im.gauge) sum.gauge = graph.variables()[*im.gauge].id;
+
+  detail::BlockSystem& sys = im.system;
+  const int threads = std::max(1, options_.num_threads);
+  const int n = sys.size();
+  std::vector<Variable> x = graph.variables();
+  std::vector<Variable> trial;
+  Eigen::VectorXd grad(n), step(n), hdiag(n), dscale(n), tmp(n);
+
+  double chi2 = 0.0;
+  double cost = sys.linearize(graph, x, grad, threads, &chi2);
+  sum.initial_chi2 = chi2;
+  sum.initial_cost = cost;
+  double* hv = n > 0 ? sys.cholesky().values() : nullptr;
+  const std::vector<int>& diag = sys.diagIndex();
+  auto save_diag = [&] {
+    for (int k = 0; k < n; ++k) hdiag[k] = hv[diag[k]];
+    // Marquardt scaling, clamped as in Ceres (1e-6 .. 1e32) so that zero-curvature directions get damped.
+    for (int k = 0; k < n; ++k) dscale[k] = std::clamp(hdiag[k], 1e-6, 1e32);
+  };
+  auto set_damping = [&](double mu) {
+    for (int k = 0; k < n; ++k) hv[diag[k]] = hdiag[k] + mu * dscale[k];
+  };
+  if (n == 0) {
+    sum.final_chi2 = chi2;
+    sum.final_cost = cost;
+    sum.converged = true;
+    sum.termination = "no free variables";
+  }
+  save_diag();
+
+  double lambda = options_.initial_lambda;
+  if (options_.warm_start_damping && !sum.structure_rebuilt && im.last_lambda > 0.0) lambda = im.last_lambda;
+  double nu = 2.0;
+  double radius = options_.initial_radius;
+  if (options_.warm_start_damping && !sum.structure_rebuilt && im.last_radius > 0.0) radius = im.last_radius;
+  double x_norm = stateNorm(x);
+  // Dogleg state: Gauss-Newton step and Cauchy point for the current linearization.
+  bool need_solve = true;
+  Eigen::VectorXd h_gn(n), h_sd(n);
+
+  while (n > 0 && sum.iterations < options_.max_iterations) {
+    if (grad.lpNorm<Eigen::Infinity>() <= options_.gradient_tolerance) {
+      sum.converged = true;
+      sum.termination = "gradient tolerance";
+      break;
+    }
+    double pred = 0.0;
+    if (options_.algorithm == Algorithm::kLevenbergMarquardt) {
+      set_damping(lambda);
+      ++sum.iterations;
+      if (!im.factorize()) {
+        // Not positive definite (e.g. an indefinite / singular system): raise the damping, no step.
+        lambda *= nu;
+        nu *= 2.0;
+        if (lambda > 1e32) {
+          sum.termination = "damping diverged (system not positive definite)";
+          break;
+        }
+        continue;
+      }
+      sys.cholesky().solve(grad.data(), step.data());
+      step = -step;
+      // Predicted decrease of F (Madsen/Nielsen): h^T (lambda D h - g).
+      pred = step.dot(lambda * dscale.cwiseProduct(step) - grad);
+    } else if (options_.algorithm == Algorithm::kGaussNewton) {
+      ++sum.iterations;
+      double mu = 0.0;
+      set_damping(mu);
+      bool ok = im.factorize();
+      // A singular / indefinite Gauss-Newton system gets the smallest damping that makes it factorizable.
+      for (mu = 1e-12; !ok && mu < 1e32; mu *= 100.0) {
+        set_damping(mu);
+        ok = im.factorize();
+      }
+      if (!ok) {
+        sum.termination = "system not positive definite";
+        break;
+      }
+      sys.cholesky().solve(grad.data(), step.data());
+      step = -step;
+      pred = -step.dot(grad);
+    } else {
+      ++sum.iterations;
+      if (need_solve) {
+        set_damping(0.0);
+        sys.cholesky().multiply(grad.data(), tmp.data());
+        const double gHg = grad.dot(tmp);
+        const double alpha = gHg > 0.0 ? grad.squaredNorm() / gHg : 0.0;
+        h_sd = -alpha * grad;
+        bool ok = im.factorize();
+        for (double mu = 1e-12; !ok && mu < 1e32; mu *= 100.0) {
+          set_damping(mu);
+          ok = im.factorize();
+        }
+        if (!ok) {
+          sum.termination = "system not positive definite";
+          break;
+        }
+        sys.cholesky().solve(grad.data(), h_gn.data());
+        h_gn = -h_gn;
+        set_damping(0.0);
+        need_solve = false;
+      }
+      const double gn_norm = h_gn.norm();
+      const double sd_norm = h_sd.norm();
+      if (gn_norm <= radius) {
+        step = h_gn;
+      } else if (sd_norm >= radius || sd_norm == 0.0) {
+        step = sd_norm > 0.0 ? Eigen::VectorXd(h_sd * (radius / sd_norm)) : Eigen::VectorXd(h_gn * (radius / gn_norm));
+      } else {
+        // Powell's dogleg: the point where the segment Cauchy point -> GN step leaves the trust region.
+        const Eigen::VectorXd d = h_gn - h_sd;
+        const double c = h_sd.dot(d), dd = d.squaredNorm();
+        const double disc = c * c + dd * (radius * radius - sd_norm * sd_norm);
+        const double beta = (-c + std::sqrt(std::max(0.0, disc))) / dd;
+        step = h_sd + beta * d;
+      }
+      sys.cholesky().multiply(step.data(), tmp.data());
+      // Predicted decrease of F = sum rho ~ F + 2 g^T h + h^T H h.
+      pred = -(2.0 * grad.dot(step) + step.dot(tmp));
+    }
+
+    if (step.norm() <= options_.parameter_tolerance * (x_norm + options_.parameter_tolerance)) {
+      sum.converged = true;
+      sum.termination = "parameter tolerance";
+      break;
+    }
+    sys.retract(x, step, trial);
+    double new_chi2 = 0.0;
+    const double new_cost = sys.evaluate(graph, trial, threads, &new_chi2);
+    const double actual = cost - new_cost;
+    const double ratio = pred > 0.0 ? actual / pred : -1.0;
+    bool accept = false;
+    if (options_.algorithm == Algorithm::kGaussNewton) {
+      accept = std::isfinite(new_cost) && new_cost <= cost;
+      if (!accept && std::isfinite(new_cost) && new_cost - cost <= options_.function_tolerance * cost) {
+        sum.converged = true;  // at the minimum up to rounding
+        sum.termination = "function tolerance";
+        break;
+      }
+      if (!accept) {
+        sum.termination = "Gauss-Newton step increased the cost";
+        break;
+      }
+    } else if (options_.algorithm == Algorithm::kLevenbergMarquardt) {
+      accept = std::isfinite(new_cost) && ratio > 0.0;
+      if (accept) {
+        // Nielsen's damping update.
+        const double r = 2.0 * ratio - 1.0;
+        lambda *= std::max(1.0 / 3.0, 1.0 - r * r * r);
+        lambda = std::max(lambda, 1e-20);
+        nu = 2.0;
+      } else {
+        lambda *= nu;
+        nu *= 2.0;
+      }
+    } else {
+      accept = std::isfinite(new_cost) && ratio > 0.0;
+      if (ratio > 0.75) {
+        radius = std::max(radius, 3.0 * step.norm());
+      } else if (ratio < 0.25 || !std::isfinite(new_cost)) {
+        radius *= 0.5;
+      }
+      if (!accept && radius <= options_.parameter_tolerance * (x_norm + options_.parameter_tolerance)) {
+        sum.converged = true;
+        sum.termination = "trust region below parameter tolerance";
+        break;
+      }
+    }
+    if (!accept) continue;
+
+    ++sum.accepted_steps;
+    x.swap(trial);
+    x_norm = stateNorm(x);
+    const double rel = actual / std::max(cost, std::numeric_limits<double>::min());
+    cost = new_cost;
+    chi2 = new_chi2;
+    if (rel < options_.function_tolerance) {
+      sum.converged = true;
+      sum.termination = "function tolerance";
+      break;
+    }
+    cost = sys.linearize(graph, x, grad, threads, &chi2);
+    save_diag();
+    need_solve = true;
+  }
+  if (sum.termination.empty()) sum.termination = "maximum iterations";
+  graph.setValues(x);
+  sum.final_chi2 = chi2;
+  sum.final_cost = cost;
+  im.last_lambda = lambda;
+  im.last_radius = radius;
+  sum.symbolic_analyses = im.symbolic_total;
+  sum.numeric_factorizations = im.numeric_total;
+  sum.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return sum;
+}
+
+std::vector<Eigen::MatrixXd> Optimizer::marginalCovariances(const PoseGraph& graph,
+                                                            std::span<const VariableId> ids) {
+  Impl& im = *impl_;
+  im.ensureStructure(graph);
+  detail::BlockSystem& sys = im.system;
+  const int n = sys.size();
+  std::vector<Eigen::MatrixXd> out;
+  out.reserve(ids.size());
+  Eigen::VectorXd grad(n);
+  sys.linearize(graph, graph.variables(), grad, std::max(1, options_.num_threads), nullptr);
+  int cols = 0;
+  for (VariableId id : ids) {
+    const std::size_t v = graph.indexOf(id);
+    if (sys.offset(v) >= 0) cols += tangentDim(graph.variables()[v].kind);
+  }
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, cols), sol(n, cols);
+  if (cols > 0) {
+    if (!im.factorize()) throw std::runtime_error("marginal covariances: the Hessian is singular");
+    int c = 0;
+    for (VariableId id : ids) {
+      const std::size_t v = graph.indexOf(id);
+      const int o = sys.offset(v);
+      if (o < 0) continue;
+      for (int k = 0; k < tangentDim(graph.variables()[v].kind); ++k) rhs(o + k, c++) = 1.0;
+    }
+    // Columns of H^-1 by forward/back substitution with the sparse factor; the dense inverse is never formed.
+    sys.cholesky().solve(rhs.data(), sol.data(), cols);
+  }
+  int c = 0;
+  for (VariableId id : ids) {
+    const std::size_t v = graph.indexOf(id);
+    const int d = tangentDim(graph.variables()[v].kind);
+    const int o = sys.offset(v);
+    if (o < 0) {
+      out.push_back(Eigen::MatrixXd::Zero(d, d));
+      continue;
+    }
+    Eigen::MatrixXd block = sol.block(o, c, d, d);
+    out.push_back(0.5 * (block + block.transpose()));
+    c += d;
+  }
+  return out;
+}
+
+}  // namespace cairn::graph_slam

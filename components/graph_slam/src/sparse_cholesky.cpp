@@ -1,0 +1,113 @@
+#include "sparse_cholesky.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <stdexcept>
+
+namespace cairn::graph_slam::detail {
+
+SparseCholesky::SparseCholesky() {
+  cholmod_start(&common_);
+  common_.quick_return_if_not_posdef = 1;
+  common_.print = 0;
+}
+
+SparseCholesky::~SparseCholesky() {
+  freeWork();
+  if (l_ != nullptr) cholmod_free_factor(&l_, &common_);
+  if (a_ != nullptr) cholmod_free_sparse(&a_, &common_);
+  cholmod_finish(&common_);
+}
+
+void SparseCholesky::freeWork() {
+  if (x_ != nullptr) cholmod_free_dense(&x_, &common_);
+  if (y_ != nullptr) cholmod_free_dense(&y_, &common_);
+  if (e_ != nullptr) cholmod_free_dense(&e_, &common_);
+}
+
+void SparseCholesky::setPattern(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx) {
+  freeWork();
+  if (l_ != nullptr) cholmod_free_factor(&l_, &common_);
+  if (a_ != nullptr) cholmod_free_sparse(&a_, &common_);
+  a_ = cholmod_allocate_sparse(n, n, row_idx.size(), /*sorted=*/1, /*packed=*/1, /*stype=*/1, CHOLMOD_REAL,
+                               &common_);
+  if (a_ == nullptr) throw std::runtime_error("CHOLMOD: cannot allocate the Hessian");
+  std::copy(col_ptr.begin(), col_ptr.end(), static_cast<int*>(a_->p));
+  std::copy(row_idx.begin(), row_idx.end(), static_cast<int*>(a_->i));
+  std::fill_n(static_cast<double*>(a_->x), row_idx.size(), 0.0);
+}
+
+void SparseCholesky::analyze(bool natural_ordering) {
+  if (l_ != nullptr) cholmod_free_factor(&l_, &common_);
+  if (natural_ordering) {
+    common_.nmethods = 1;
+    common_.method[0].ordering = CHOLMOD_NATURAL;
+    common_.postorder = 1;
+  } else {
+    common_.nmethods = 0;
+  }
+  l_ = cholmod_analyze(a_, &common_);
+  if (l_ == nullptr) throw std::runtime_error("CHOLMOD: symbolic analysis failed");
+  ++symbolic_analyses_;
+}
+
+bool SparseCholesky::factorize() {
+  ++numeric_factorizations_;
+  const int ok = cholmod_factorize(a_, l_, &common_);
+  return ok != 0 && common_.status == CHOLMOD_OK && l_->minor == l_->n;
+}
+
+void SparseCholesky::solve(const double* b, double* x, int ncols) {
+  const int n = size();
+  cholmod_dense bd;
+  std::memset(&bd, 0, sizeof(bd));
+  bd.nrow = n;
+  bd.ncol = ncols;
+  bd.nzmax = static_cast<size_t>(n) * ncols;
+  bd.d = n;
+  bd.x = const_cast<double*>(b);
+  bd.xtype = CHOLMOD_REAL;
+  bd.dtype = CHOLMOD_DOUBLE;
+  if (x_ != nullptr && static_cast<int>(x_->ncol) != ncols) freeWork();
+  if (cholmod_solve2(CHOLMOD_A, l_, &bd, nullptr, &x_, nullptr, &y_, &e_, &common_) == 0) {
+    throw std::runtime_error("CHOLMOD: solve failed");
+  }
+  std::memcpy(x, x_->x, sizeof(double) * n * ncols);
+}
+
+void SparseCholesky::multiply(const double* x, double* y) {
+  const int n = size();
+  cholmod_dense xd, yd;
+  std::memset(&xd, 0, sizeof(xd));
+  xd.nrow = n;
+  xd.ncol = 1;
+  xd.nzmax = n;
+  xd.d = n;
+  xd.xtype = CHOLMOD_REAL;
+  xd.dtype = CHOLMOD_DOUBLE;
+  yd = xd;
+  xd.x = const_cast<double*>(x);
+  yd.x = y;
+  double alpha[2] = {1.0, 0.0}, beta[2] = {0.0, 0.0};
+  cholmod_sdmult(a_, 0, alpha, beta, &xd, &yd, &common_);
+}
+
+double SparseCholesky::factorNonzeros() const { return common_.lnz; }
+
+Eigen::MatrixXd solveSparseSpd(int n, const std::vector<Eigen::Triplet<double>>& upper, const Eigen::MatrixXd& b) {
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> a(n, n);
+  a.setFromTriplets(upper.begin(), upper.end());
+  a.makeCompressed();
+  SparseCholesky chol;
+  std::vector<int> cp(a.outerIndexPtr(), a.outerIndexPtr() + n + 1);
+  std::vector<int> ri(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
+  chol.setPattern(n, cp, ri);
+  std::copy(a.valuePtr(), a.valuePtr() + a.nonZeros(), chol.values());
+  chol.analyze(/*natural_ordering=*/false);
+  if (!chol.factorize()) throw std::runtime_error("linear system is not positive definite");
+  Eigen::MatrixXd x(n, b.cols());
+  chol.solve(b.data(), x.data(), static_cast<int>(b.cols()));
+  return x;
+}
+
+}  // namespace cairn::graph_slam::detail

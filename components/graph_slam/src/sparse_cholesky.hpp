@@ -1,0 +1,63 @@
+// Thin RAII wrapper around CHOLMOD (private to the core; CHOLMOD headers never reach public headers).
+#pragma once
+
+#include <cholmod.h>
+
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+namespace cairn::graph_slam::detail {
+
+/// Owns a cholmod_common, one symmetric (upper-stored) matrix and its factor. The symbolic analysis is done
+/// once by analyze(); factorize() is numeric only and may be called any number of times after the values
+/// of matrix() changed (same pattern).
+class SparseCholesky {
+ public:
+  SparseCholesky();
+  ~SparseCholesky();
+  SparseCholesky(const SparseCholesky&) = delete;
+  SparseCholesky& operator=(const SparseCholesky&) = delete;
+
+  /// Allocates an n x n upper-stored matrix with the given CSC pattern (values zero); drops any factor.
+  void setPattern(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx);
+  cholmod_sparse* matrix() { return a_; }
+  double* values() { return static_cast<double*>(a_->x); }
+  const int* colPtr() const { return static_cast<const int*>(a_->p); }
+  int size() const { return a_ != nullptr ? static_cast<int>(a_->nrow) : 0; }
+
+  /// Symbolic analysis. natural_ordering: the pattern is already in a fill-reducing order (the optimizer
+  /// orders the blocks with AMD itself); otherwise CHOLMOD's default orderings are tried.
+  void analyze(bool natural_ordering);
+  bool analyzed() const { return l_ != nullptr; }
+  /// Numeric factorization; false if the matrix is not positive definite.
+  bool factorize();
+  /// Solves A X = B for ncols right-hand sides stored column-major (n x ncols).
+  void solve(const double* b, double* x, int ncols = 1);
+  /// y = A x (A symmetric, upper stored).
+  void multiply(const double* x, double* y);
+
+  int symbolicAnalyses() const { return symbolic_analyses_; }
+  int numericFactorizations() const { return numeric_factorizations_; }
+  /// Nonzeros of the factor (after analyze()).
+  double factorNonzeros() const;
+  cholmod_common* common() { return &common_; }
+
+ private:
+  void freeWork();
+  cholmod_common common_;
+  cholmod_sparse* a_ = nullptr;
+  cholmod_factor* l_ = nullptr;
+  cholmod_dense* x_ = nullptr;
+  cholmod_dense* y_ = nullptr;
+  cholmod_dense* e_ = nullptr;
+  int symbolic_analyses_ = 0;
+  int numeric_factorizations_ = 0;
+};
+
+/// Solves the SPD system A X = B given the upper triangle of A as triplets (duplicates summed).
+/// Throws std::runtime_error if A is not positive definite.
+Eigen::MatrixXd solveSparseSpd(int n, const std::vector<Eigen::Triplet<double>>& upper, const Eigen::MatrixXd& b);
+
+}  // namespace cairn::graph_slam::detail

@@ -1,0 +1,181 @@
+// cairn-slam: command-line front end of the pose-graph optimizer (`cairn slam <verb> ...`).
+//   cairn-slam optimize <in.g2o> [-o out.g2o] [--solver lm|gn|dogleg] [--robust huber:1.0]
+//              [--init guess|odometry|chordal] [--max-iters N] [--json]
+//              [--fix-information reject|clamp] [--skip-unknown-tags] [--threads N]
+// Bad input: one line `cairn: <file>:<line>: <what>` on stderr, exit code 2.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <iostream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cairn/graph_slam/g2o_io.hpp"
+#include "cairn/graph_slam/initialization.hpp"
+#include "cairn/graph_slam/optimizer.hpp"
+
+namespace gs = cairn::graph_slam;
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: cairn slam optimize <in.g2o> [-o out.g2o] [--solver lm|gn|dogleg] [--robust KERNEL:PARAM]\n"
+    "                           [--init guess|odometry|chordal] [--max-iters N] [--json]\n"
+    "                           [--fix-information reject|clamp] [--skip-unknown-tags] [--threads N]\n"
+    "  KERNEL: none, huber, cauchy, gm (Geman-McClure), dcs (dynamic covariance scaling)\n";
+
+int usageError(const std::string& what) {
+  std::cerr << "cairn: slam: " << what << "\n" << kUsage;
+  return 2;
+}
+
+std::string jsonNumber(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.17g", v);
+  return buf;
+}
+
+int parseInt(const std::string& s, const char* what) {
+  std::size_t pos = 0;
+  int v = 0;
+  try {
+    v = std::stoi(s, &pos);
+  } catch (const std::exception&) {
+    pos = 0;
+  }
+  if (pos != s.size() || s.empty()) throw std::invalid_argument(std::string(what) + " must be an integer, got '" + s + "'");
+  return v;
+}
+
+int optimizeVerb(const std::vector<std::string>& args) {
+  std::string in, out;
+  gs::OptimizerOptions opt;
+  gs::RobustKernel kernel;
+  gs::Initialization init = gs::Initialization::kGuess;
+  gs::G2oReadOptions read_opt;
+  bool json = false;
+  try {
+    for (std::size_t k = 0; k < args.size(); ++k) {
+      const std::string& a = args[k];
+      auto value = [&]() -> const std::string& {
+        if (k + 1 >= args.size()) throw std::invalid_argument(a + " needs a value");
+        return args[++k];
+      };
+      if (a == "-o" || a == "--output") {
+        out = value();
+      } else if (a == "--solver") {
+        opt.algorithm = gs::parseAlgorithm(value());
+      } else if (a == "--robust") {
+        kernel = gs::RobustKernel::parse(value());
+      } else if (a == "--init") {
+        init = gs::parseInitialization(value());
+      } else if (a == "--max-iters") {
+        opt.max_iterations = parseInt(value(), "--max-iters");
+        if (opt.max_iterations < 0) throw std::invalid_argument("--max-iters must be >= 0");
+      } else if (a == "--threads") {
+        opt.num_threads = parseInt(value(), "--threads");
+        if (opt.num_threads < 1) throw std::invalid_argument("--threads must be >= 1");
+      } else if (a == "--json") {
+        json = true;
+      } else if (a == "--fix-information") {
+        const std::string& v = value();
+        if (v == "clamp") {
+          read_opt.information_fix = gs::G2oReadOptions::InformationFix::kClamp;
+        } else if (v == "reject") {
+          read_opt.information_fix = gs::G2oReadOptions::InformationFix::kReject;
+        } else {
+          throw std::invalid_argument("--fix-information expects reject or clamp, got '" + v + "'");
+        }
+      } else if (a == "--skip-unknown-tags") {
+        read_opt.skip_unknown_tags = true;
+      } else if (a == "-h" || a == "--help") {
+        std::cout << kUsage;
+        return 0;
+      } else if (!a.empty() && a[0] == '-') {
+        throw std::invalid_argument("unknown option " + a);
+      } else if (in.empty()) {
+        in = a;
+      } else {
+        throw std::invalid_argument("unexpected argument " + a);
+      }
+    }
+  } catch (const std::invalid_argument& e) {
+    return usageError(e.what());
+  }
+  if (in.empty()) return usageError("optimize needs an input file");
+
+  gs::G2oReadReport report;
+  gs::PoseGraph graph;
+  try {
+    graph = gs::readG2o(in, read_opt, &report);
+  } catch (const gs::G2oError& e) {
+    std::cerr << "cairn: " << e.what() << "\n";
+    return 2;
+  }
+  for (const std::string& w : report.warnings) std::cerr << "cairn: warning: " << w << "\n";
+  if (report.clamped_information > 0) {
+    std::cerr << "cairn: warning: " << in << ": projected " << report.clamped_information
+              << " information matrices onto the nearest positive semidefinite matrix\n";
+  }
+  if (kernel.active()) graph.setRobustKernelAll(kernel);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  gs::OptimizerSummary sum;
+  try {
+    gs::initialize(graph, init);
+    gs::Optimizer optimizer(opt);
+    sum = optimizer.optimize(graph);
+  } catch (const std::exception& e) {
+    std::cerr << "cairn: " << in << ":0: " << e.what() << "\n";
+    return 2;
+  }
+  const double time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double initial_chi2 = init == gs::Initialization::kGuess ? sum.initial_chi2 : sum.initial_chi2;
+
+  if (!out.empty()) {
+    try {
+      gs::writeG2o(graph, out);
+    } catch (const std::exception& e) {
+      std::cerr << "cairn: " << out << ":0: " << e.what() << "\n";
+      return 2;
+    }
+  }
+  if (json) {
+    std::cout << "{\"vertices\":" << sum.variables << ",\"edges\":" << sum.factors
+              << ",\"initial_chi2\":" << jsonNumber(initial_chi2) << ",\"final_chi2\":" << jsonNumber(sum.final_chi2)
+              << ",\"iterations\":" << sum.iterations << ",\"time_s\":" << jsonNumber(time_s)
+              << ",\"converged\":" << (sum.converged ? "true" : "false") << "}\n";
+  } else {
+    std::cout << "input:        " << in << " (" << sum.variables << " vertices, " << sum.factors << " edges)\n"
+              << "solver:       "
+              << (opt.algorithm == gs::Algorithm::kLevenbergMarquardt ? "lm"
+                  : opt.algorithm == gs::Algorithm::kGaussNewton      ? "gn"
+                                                                      : "dogleg")
+              << ", robust " << kernel.toString() << "\n"
+              << "initial chi2: " << jsonNumber(sum.initial_chi2) << "\n"
+              << "final chi2:   " << jsonNumber(sum.final_chi2) << "\n";
+    if (kernel.active()) std::cout << "final cost:   " << jsonNumber(sum.final_cost) << " (robust)\n";
+    std::cout << "iterations:   " << sum.iterations << " (" << sum.accepted_steps << " accepted)\n"
+              << "converged:    " << (sum.converged ? "yes" : "no") << " (" << sum.termination << ")\n"
+              << "time:         " << time_s << " s\n";
+    if (sum.gauge) std::cout << "gauge:        vertex " << *sum.gauge << " held fixed\n";
+    if (!out.empty()) std::cout << "output:       " << out << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.empty() || args[0] == "-h" || args[0] == "--help") {
+    std::cout << kUsage;
+    return args.empty() ? 2 : 0;
+  }
+  const std::string verb = args[0];
+  args.erase(args.begin());
+  if (verb == "optimize") return optimizeVerb(args);
+  return usageError("unknown verb '" + verb + "'");
+}
