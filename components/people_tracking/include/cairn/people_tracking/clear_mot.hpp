@@ -1,0 +1,43 @@
+// CLEAR MOT metrics (Bernardin & Stiefelhagen 2008): per frame, correspondences from the previous frame are
+// kept while within the match threshold, the rest are assigned optimally (Hungarian on distances); an ID switch
+// is counted when a ground-truth object is matched to a different hypothesis than at its last match.
+// MOTA = 1 - (FN + FP + IDSW) / GT, MOTP = mean distance of matches.
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <vector>
+
+namespace cairn::people_tracking {
+
+struct MotObject {
+  int id = 0;
+  Eigen::Vector2d p = Eigen::Vector2d::Zero();
+};
+
+struct MotMetrics {
+  std::size_t frames = 0, gt = 0, matches = 0, fp = 0, fn = 0, id_switches = 0, gt_tracks = 0, ignored = 0;
+  double distance_sum = 0.0;
+  [[nodiscard]] double mota() const { return gt ? 1.0 - double(fn + fp + id_switches) / double(gt) : 0.0; }
+  [[nodiscard]] double motp() const { return matches ? distance_sum / double(matches) : 0.0; }
+  [[nodiscard]] double idSwitchesPer100Tracks() const { return gt_tracks ? 100.0 * double(id_switches) / double(gt_tracks) : 0.0; }
+};
+
+class ClearMot {
+ public:
+  explicit ClearMot(double threshold = 0.5) : threshold_(threshold) {}
+  // dont_care: positions of people that exist but do not count (out of line of sight); unmatched hypotheses
+  // within the threshold of one are neither FP nor matches.
+  void addFrame(const std::vector<MotObject>& gt, const std::vector<MotObject>& hyp,
+                const std::vector<Eigen::Vector2d>& dont_care = {});
+  [[nodiscard]] MotMetrics metrics() const;
+
+ private:
+  double threshold_;
+  MotMetrics m_;
+  std::map<int, int> last_match_;  // gt id -> hypothesis id at its last match
+  std::map<int, int> current_;     // gt id -> hypothesis id matched in the previous frame
+  std::map<int, bool> seen_gt_;
+};
+
+}  // namespace cairn::people_tracking

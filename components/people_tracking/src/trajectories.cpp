@@ -1,0 +1,134 @@
+#include "cairn/people_tracking/trajectories.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <regex>
+#include <sstream>
+
+#include "cairn/people_tracking/scan.hpp"
+
+namespace cairn::people_tracking {
+
+std::optional<Eigen::Vector2d> TrajectorySet::positionAt(int id, double t) const {
+  const auto it = people.find(id);
+  if (it == people.end()) return std::nullopt;
+  const auto& v = it->second;
+  if (v.empty() || t < v.front().t || t > v.back().t) return std::nullopt;
+  const auto hi = std::lower_bound(v.begin(), v.end(), t, [](const TrajectoryPoint& a, double x) { return a.t < x; });
+  if (hi->t == t) return hi->p;
+  const auto lo = hi - 1;
+  if (hi->t - lo->t > max_gap) return std::nullopt;
+  const double a = (t - lo->t) / (hi->t - lo->t);
+  return Eigen::Vector2d((1 - a) * lo->p + a * hi->p);
+}
+
+std::size_t TrajectorySet::samples() const {
+  std::size_t n = 0;
+  for (const auto& [id, v] : people) n += v.size();
+  return n;
+}
+
+namespace {
+[[noreturn]] void bad(const std::string& path, std::size_t line, const std::string& what) {
+  throw InputError(path + ":" + std::to_string(line) + ": " + what);
+}
+
+void finish(TrajectorySet& s, const std::string& path) {
+  if (s.people.empty()) throw InputError(path + ": no trajectories");
+  s.t_begin = std::numeric_limits<double>::infinity();
+  s.t_end = -s.t_begin;
+  s.min = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  s.max = -s.min;
+  for (auto& [id, v] : s.people) {
+    std::stable_sort(v.begin(), v.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+    // Drop duplicate stamps (keep the first).
+    v.erase(std::unique(v.begin(), v.end(), [](const auto& a, const auto& b) { return a.t == b.t; }), v.end());
+    s.t_begin = std::min(s.t_begin, v.front().t);
+    s.t_end = std::max(s.t_end, v.back().t);
+    for (const auto& p : v) {
+      s.min = s.min.cwiseMin(p.p);
+      s.max = s.max.cwiseMax(p.p);
+    }
+  }
+}
+}  // namespace
+
+TrajectorySet loadTrajectories(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot open trajectory file " + path);
+  std::stringstream buf;
+  buf << in.rdbuf();
+  const std::string text = buf.str();
+  TrajectorySet s;
+  std::istringstream lines(text);
+  std::string line;
+  std::size_t ln = 0;
+  if (text.find("TRACK.") != std::string::npos) {
+    s.format = "edinburgh";
+    s.max_gap = 1.0;
+    constexpr double kMetresPerPixel = 0.0247, kFps = 9.0;
+    const std::regex head(R"(TRACK\.R(\d+)\s*=\s*\[(.*)\];?\s*$)");
+    while (std::getline(lines, line)) {
+      ++ln;
+      const auto pos = line.find("TRACK.");
+      if (pos == std::string::npos) continue;
+      std::smatch m;
+      const std::string sub = line.substr(pos);
+      if (!std::regex_search(sub, m, head)) bad(path, ln, "malformed TRACK entry");
+      const int id = std::stoi(m[1]);
+      std::string body = m[2];
+      std::replace_if(body.begin(), body.end(), [](char c) { return c == '[' || c == ']' || c == ';'; }, ' ');
+      std::istringstream nums(body);
+      double x, y, t;
+      while (nums >> x >> y >> t) s.people[id].push_back({t / kFps, {x * kMetresPerPixel, y * kMetresPerPixel}});
+      if (!nums.eof()) bad(path, ln, "non-numeric value in TRACK entry");
+    }
+  } else if (text.find(',') != std::string::npos) {
+    s.format = "csv";
+    while (std::getline(lines, line)) {
+      ++ln;
+      if (line.empty() || line[0] == '#') continue;
+      if (ln == 1 && (line.find('t') != std::string::npos || line.find('x') != std::string::npos)) continue;
+      std::replace(line.begin(), line.end(), ',', ' ');
+      std::istringstream f(line);
+      double t, x, y;
+      int id;
+      if (!(f >> t >> id >> x >> y) || !std::isfinite(t) || !std::isfinite(x) || !std::isfinite(y))
+        bad(path, ln, "expected t,id,x,y");
+      s.people[id].push_back({t, {x, y}});
+    }
+  } else {
+    s.format = "obsmat";
+    struct Row {
+      double frame;
+      int id;
+      double x, y;
+    };
+    std::vector<Row> rows;
+    while (std::getline(lines, line)) {
+      ++ln;
+      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+      std::istringstream f(line);
+      double frame, id, x, z, y;
+      if (!(f >> frame >> id >> x >> z >> y) || !std::isfinite(x) || !std::isfinite(y))
+        bad(path, ln, "expected obsmat row 'frame id x z y vx vz vy'");
+      rows.push_back({frame, static_cast<int>(id), x, y});
+    }
+    std::vector<double> frames;
+    for (const auto& r : rows) frames.push_back(r.frame);
+    std::sort(frames.begin(), frames.end());
+    frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
+    double step = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 1; i < frames.size(); ++i) step = std::min(step, frames[i] - frames[i - 1]);
+    if (!std::isfinite(step)) step = 1.0;
+    constexpr double kAnnotationPeriod = 0.4;  // ETH/UCY annotations at 2.5 fps
+    for (const auto& r : rows) s.people[r.id].push_back({r.frame / step * kAnnotationPeriod, {r.x, r.y}});
+    s.max_gap = 2.5 * kAnnotationPeriod;
+  }
+  finish(s, path);
+  return s;
+}
+
+}  // namespace cairn::people_tracking
