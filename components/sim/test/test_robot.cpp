@@ -147,3 +147,27 @@ TEST(Route, ReachesAllWaypointsInOrder) {
   EXPECT_NEAR(robot.pose().x, 0.0, 0.2);
   EXPECT_NEAR(robot.pose().y, 2.0, 0.2);
 }
+
+TEST(Odometry, RotationNoiseOfATurnInPlace) {
+  // Turning by pi in place: heading error ~ N(pi * rotation_scale_error, sigma_rot² pi), no translation.
+  OdometryNoiseConfig c;
+  c.sigma_rot = 0.01;
+  c.rotation_scale_error = 0.02;
+  double sum = 0, sum2 = 0;
+  const int runs = 500;
+  for (int r = 0; r < runs; ++r) {
+    OdometryModel odom(c, {0, 0, 0}, Rng(5000 + r));
+    Pose2 truth{0, 0, 0};
+    for (int i = 0; i < 300; ++i) {
+      truth = integrateArc(truth, {0.0, kPi / 3.0}, 0.01);
+      odom.update(truth);
+    }
+    const double e = normalizeAngle(odom.pose().theta - truth.theta);
+    EXPECT_NEAR(odom.pose().x, 0.0, 1e-12);
+    sum += e;
+    sum2 += e * e;
+  }
+  const double mean = sum / runs, sd = std::sqrt(sum2 / runs - mean * mean);
+  EXPECT_NEAR(mean, 0.02 * kPi, 0.003);
+  EXPECT_NEAR(sd, 0.01 * std::sqrt(kPi), 0.003);
+}
