@@ -625,7 +625,9 @@ class SetBlackboardNode : public SyncActionNode {
     }
   }
   static PortList providedPorts() {
-    return {InputPort<Value>("value", "literal or {key}"), BidirectionalPort<Value>("output_key", "{key} to write")};
+    PortInfo out = BidirectionalPort<Value>("output_key", "key to write: {key} or key");
+    out.literal_is_key = true;
+    return {InputPort<Value>("value", "literal or {key}"), out};
   }
 
  protected:

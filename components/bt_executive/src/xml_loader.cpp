@@ -23,6 +23,17 @@ using tinyxml2::XMLElement;
 constexpr std::array<std::string_view, 4> kPre = {"_failureIf", "_successIf", "_skipIf", "_while"};
 constexpr std::array<std::string_view, 4> kPost = {"_onSuccess", "_onFailure", "_post", "_onHalted"};
 
+std::string xmlError(const XMLDocument& doc) {
+  std::string detail = doc.ErrorStr() ? doc.ErrorStr() : "";
+  if (auto p = detail.find("Line number="); p != std::string::npos) {
+    auto c = detail.find(": ", p);
+    detail = c == std::string::npos ? std::string() : detail.substr(c + 2);
+  }
+  std::string m = std::string("XML error: ") + doc.ErrorName();
+  if (!detail.empty()) m += " (" + detail + ")";
+  return m;
+}
+
 struct Where {
   std::string file;
   int line = 0;
@@ -108,7 +119,7 @@ class Loader {
       throw LoadError(path, 0, "file not found");
     }
     if (doc->LoadFile(path.c_str()) != tinyxml2::XML_SUCCESS)
-      throw LoadError(path, doc->ErrorLineNum(), std::string("XML error: ") + doc->ErrorStr());
+      throw LoadError(path, doc->ErrorLineNum(), xmlError(*doc));
     docs_.push_back(std::move(doc));
     parseDocument(*docs_.back(), path, fs::path(path).parent_path());
   }
@@ -116,7 +127,7 @@ class Loader {
   void loadText(std::string_view text, const std::string& name) {
     auto doc = std::make_unique<XMLDocument>();
     if (doc->Parse(text.data(), text.size()) != tinyxml2::XML_SUCCESS)
-      throw LoadError(name, doc->ErrorLineNum(), std::string("XML error: ") + doc->ErrorStr());
+      throw LoadError(name, doc->ErrorLineNum(), xmlError(*doc));
     docs_.push_back(std::move(doc));
     parseDocument(*docs_.back(), name, fs::current_path());
   }
@@ -323,7 +334,7 @@ class Loader {
         continue;
       }
       std::string key;
-      if (blackboardKey(*value, p.name, key)) {
+      if (blackboardKey(*value, p.name, key) || (p.literal_is_key && !(key = *value).empty())) {
         if (p.is_script) fail(spec->where, "port '" + p.name + "' must be a literal script, not a blackboard key");
         sp.key = key;
         declare(bb, key, p.type, p.type->dynamic, spec->where);

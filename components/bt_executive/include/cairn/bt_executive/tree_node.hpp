@@ -32,6 +32,7 @@ struct PortInfo {
   std::optional<std::string> default_value;  ///< literal or "{key}"; no default on an input port = required
   std::string description;
   bool is_script = false;  ///< the literal is a script, parsed and bound at load (Script, ScriptCondition)
+  bool literal_is_key = false;  ///< a literal names a blackboard key ("key" == "{key}"; SetBlackboard output_key)
 };
 using PortList = std::vector<PortInfo>;
 
