@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cairn/people_tracking/classifier.hpp"
+#include "tool_bench.hpp"
 
 
 using namespace cairn::people_tracking;
@@ -78,7 +79,7 @@ void usage() {
       "  train --kind adaboost|svm [--features arras14@1|stuede5@1] [--scenes 1500] [--seed 1] --out FILE\n"
       "  eval  --model FILE [--scenes 500] [--seed 1000003] [--json]\n"
       "  bench --world auto --trajectories FILE [--robot-path FILE] [--seed N] [--duration S] [--max-people N]\n"
-      "        [--association gnn|jpda] [--model FILE] [--dump DIR] [--json]");
+      "        [--association gnn|jpda] [--model FILE] [--rate HZ] [--start S] [--dump DIR] [--json]");
 }
 
 int train(const Args& a) {
@@ -142,6 +143,7 @@ int main(int argc, char** argv) {
   try {
     if (verb == "train") return train(parse(argc, argv, 2, {}));
     if (verb == "eval") return eval(parse(argc, argv, 2, {"json"}));
+    if (verb == "bench") return runBenchVerb(argc, argv);
 
   } catch (const std::exception& e) {
     fail(e.what());

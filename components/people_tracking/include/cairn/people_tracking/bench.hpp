@@ -1,0 +1,55 @@
+// Tracker benchmark: walkers replay recorded trajectories in a generated scene (legs with gait, laser noise),
+// a static or moving robot scans them, and the tracker output is scored with CLEAR MOT against the people that
+// are within sensor range and line of sight. A baseline tracker runs on the same detections in the same run.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "cairn/people_tracking/clear_mot.hpp"
+#include "cairn/people_tracking/scene.hpp"
+#include "cairn/people_tracking/tracker.hpp"
+
+namespace cairn::people_tracking {
+
+struct BenchParams {
+  std::string trajectories;
+  std::string world = "auto";  // "auto": open walled area around the trajectories, robot at its centre
+  std::string robot_path;      // "" static; "circle:R" circles the centre at 0.4 m/s; or CSV t,x,y,theta
+  std::uint64_t seed = 1;
+  double scan_rate = 10.0;     // Hz
+  double start = 0.0;          // s after the first annotation
+  double duration = 0.0;       // s, 0 = whole file
+  std::string model;           // classifier file; empty = shipped leg_adaboost_arras14.yml
+  TrackerParams tracker{};
+  DetectorParams detector{};
+  LaserModel laser{};          // runBench sets a 360 deg scan unless laser_fov_set
+  bool laser_fov_set = false;
+  double sensor_range = 8.0;   // m, people farther away do not count (Yuan's 8 m field)
+  int min_visible_beams = 3;   // line of sight: at least this many beams hit the person's legs
+  double match_threshold = 0.5;
+  std::string dump_dir;        // if set: groundtruth.csv and tracks.csv (t,id,x,y)
+};
+
+struct BenchRun {
+  MotMetrics mot;
+  double process_seconds = 0.0;  // detection + tracking CPU time (wall clock of the processing only)
+  [[nodiscard]] double scansPerSecond(std::size_t scans) const {
+    return process_seconds > 0 ? double(scans) / process_seconds : 0.0;
+  }
+};
+
+struct BenchResult {
+  std::string format;
+  std::size_t scans = 0;
+  double duration = 0.0;
+  std::size_t people_in_file = 0;
+  double mean_people_counted = 0.0;
+  BenchRun cairn, baseline;
+};
+
+// Throws InputError for unsupported worlds, unreadable files or bad robot paths.
+BenchResult runBench(const BenchParams& params);
+std::string benchJson(const BenchParams& params, const BenchResult& result);
+
+}  // namespace cairn::people_tracking

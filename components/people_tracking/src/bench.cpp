@@ -1,0 +1,290 @@
+#include "cairn/people_tracking/bench.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include "cairn/people_tracking/classifier.hpp"
+#include "cairn/people_tracking/detector.hpp"
+#include "cairn/people_tracking/trajectories.hpp"
+
+namespace cairn::people_tracking {
+
+namespace {
+
+// Baseline: greedy nearest-neighbour association on positions without a motion model (what the
+// wg-perception leg_detector-style trackers do), 0.5 m gate, confirmed after 2 hits, dropped after 0.5 s.
+class NearestNeighbourTracker {
+ public:
+  struct T {
+    int id;
+    Eigen::Vector2d p;
+    double last;
+    int hits;
+  };
+  void update(double t, const std::vector<PersonDetection>& dets) {
+    std::vector<bool> used(dets.size(), false), matched(tracks_.size(), false);
+    std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
+    for (std::size_t i = 0; i < tracks_.size(); ++i)
+      for (std::size_t j = 0; j < dets.size(); ++j) {
+        const double d = (tracks_[i].p - dets[j].position).norm();
+        if (d < 0.5) pairs.emplace_back(d, i, j);
+      }
+    std::sort(pairs.begin(), pairs.end());
+    for (const auto& [d, i, j] : pairs) {
+      if (matched[i] || used[j]) continue;
+      matched[i] = used[j] = true;
+      tracks_[i].p = dets[j].position;
+      tracks_[i].last = t;
+      ++tracks_[i].hits;
+    }
+    for (std::size_t j = 0; j < dets.size(); ++j)
+      if (!used[j]) tracks_.push_back({next_++, dets[j].position, t, 1});
+    std::erase_if(tracks_, [&](const T& x) { return t - x.last > 0.5; });
+  }
+  [[nodiscard]] std::vector<MotObject> confirmed() const {
+    std::vector<MotObject> out;
+    for (const auto& x : tracks_)
+      if (x.hits >= 2) out.push_back({x.id, x.p});
+    return out;
+  }
+
+ private:
+  std::vector<T> tracks_;
+  int next_ = 1;
+};
+
+struct RobotPath {
+  enum Kind { kStatic, kCircle, kFile } kind = kStatic;
+  Eigen::Vector2d center = Eigen::Vector2d::Zero();
+  double radius = 0.0;
+  std::vector<std::pair<double, Pose2>> poses;
+
+  Pose2 at(double t, double t0) const {
+    if (kind == kStatic) return Pose2{center.x(), center.y(), 0.0};
+    if (kind == kCircle) {
+      const double w = 0.4 / radius;  // 0.4 m/s
+      const double a = w * (t - t0);
+      return Pose2{center.x() + radius * std::cos(a), center.y() + radius * std::sin(a), a + M_PI / 2};
+    }
+    if (t <= poses.front().first) return poses.front().second;
+    if (t >= poses.back().first) return poses.back().second;
+    auto hi = std::lower_bound(poses.begin(), poses.end(), t, [](const auto& p, double x) { return p.first < x; });
+    auto lo = hi - 1;
+    const double s = (t - lo->first) / (hi->first - lo->first);
+    const double dth = std::remainder(hi->second.theta - lo->second.theta, 2 * M_PI);
+    return Pose2{lo->second.x + s * (hi->second.x - lo->second.x), lo->second.y + s * (hi->second.y - lo->second.y),
+                 lo->second.theta + s * dth};
+  }
+};
+
+RobotPath parseRobotPath(const std::string& spec, const Eigen::Vector2d& center) {
+  RobotPath r;
+  r.center = center;
+  if (spec.empty()) return r;
+  if (spec.rfind("circle:", 0) == 0) {
+    r.kind = RobotPath::kCircle;
+    try {
+      r.radius = std::stod(spec.substr(7));
+    } catch (const std::exception&) {
+      throw InputError("robot path '" + spec + "': expected circle:<radius>");
+    }
+    if (!(r.radius > 0.1)) throw InputError("robot path '" + spec + "': radius must be > 0.1 m");
+    return r;
+  }
+  std::ifstream in(spec);
+  if (!in) throw InputError("cannot open robot path " + spec);
+  r.kind = RobotPath::kFile;
+  std::string line;
+  std::size_t ln = 0;
+  while (std::getline(in, line)) {
+    ++ln;
+    if (line.empty() || line[0] == '#' || (ln == 1 && line.find('t') != std::string::npos)) continue;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream f(line);
+    double t, x, y, th;
+    if (!(f >> t >> x >> y >> th)) throw InputError(spec + ":" + std::to_string(ln) + ": expected t,x,y,theta");
+    if (!r.poses.empty() && t <= r.poses.back().first)
+      throw InputError(spec + ":" + std::to_string(ln) + ": time does not increase");
+    r.poses.push_back({t, Pose2{x, y, th}});
+  }
+  if (r.poses.empty()) throw InputError("robot path " + spec + " has no poses");
+  return r;
+}
+
+std::uint64_t mix(std::uint64_t a, std::uint64_t b) {
+  std::uint64_t z = a * 0x9E3779B97F4A7C15ULL + b + 0x632BE59BD9B4E019ULL;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
+
+BenchResult runBench(const BenchParams& params) {
+  if (params.world != "auto")
+    throw InputError("world '" + params.world + "' is not supported yet (only --world auto; world files come with the simulator component)");
+  if (!(params.scan_rate > 0.0)) throw InputError("scan rate must be positive");
+  const TrajectorySet traj = loadTrajectories(params.trajectories);
+  const std::string model_path =
+      params.model.empty() ? defaultModelPath(ClassifierKind::kAdaBoost, "arras14") : params.model;
+  auto classifier = std::make_shared<const LegClassifier>(LegClassifier::load(model_path));
+  const PersonDetector detector(classifier, params.detector);
+
+  // Auto world: walls 1.5 m outside the bounding box of all trajectories, robot at the centre.
+  const Eigen::Vector2d lo = traj.min - Eigen::Vector2d(1.5, 1.5), hi = traj.max + Eigen::Vector2d(1.5, 1.5);
+  const Eigen::Vector2d center = 0.5 * (lo + hi);
+  Scene walls;
+  walls.addSegment({lo.x(), lo.y()}, {hi.x(), lo.y()}, ObjectClass::kWall);
+  walls.addSegment({hi.x(), lo.y()}, {hi.x(), hi.y()}, ObjectClass::kWall);
+  walls.addSegment({hi.x(), hi.y()}, {lo.x(), hi.y()}, ObjectClass::kWall);
+  walls.addSegment({lo.x(), hi.y()}, {lo.x(), lo.y()}, ObjectClass::kWall);
+  const RobotPath robot = parseRobotPath(params.robot_path, center);
+
+  LaserModel laser = params.laser;
+  if (!params.laser_fov_set) {
+    laser.beams = 1080;
+    laser.angle_min = -M_PI;
+    laser.angle_increment = 2 * M_PI / 1080;
+  }
+  PeopleTracker tracker(params.tracker);
+  NearestNeighbourTracker baseline;
+  ClearMot mot(params.match_threshold), mot_base(params.match_threshold);
+  std::mt19937_64 rng(mix(params.seed, 1));
+
+  // Per-person body parameters, seeded by (seed, id).
+  std::map<int, WalkerState> walkers;
+  std::map<int, Eigen::Vector2d> last_pos;
+  for (const auto& [id, v] : traj.people) {
+    std::mt19937_64 r(mix(params.seed, static_cast<std::uint64_t>(id) + 1000));
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    WalkerState w;
+    w.leg_radius = 0.05 + 0.03 * U(r);
+    w.hip_half_width = 0.07 + 0.05 * U(r);
+    w.gait_phase = 2 * M_PI * U(r);
+    walkers[id] = w;
+  }
+
+  std::ofstream gt_csv, tr_csv;
+  if (!params.dump_dir.empty()) {
+    std::filesystem::create_directories(params.dump_dir);
+    gt_csv.open(params.dump_dir + "/groundtruth.csv");
+    tr_csv.open(params.dump_dir + "/tracks.csv");
+    if (!gt_csv || !tr_csv) throw InputError("cannot write into dump directory " + params.dump_dir);
+    gt_csv << "t,id,x,y\n";
+    tr_csv << "t,id,x,y\n";
+  }
+
+  BenchResult result;
+  result.format = traj.format;
+  result.people_in_file = traj.people.size();
+  const double t0 = traj.t_begin + params.start;
+  const double t_end = params.duration > 0 ? std::min(traj.t_end, t0 + params.duration) : traj.t_end;
+  const double dt = 1.0 / params.scan_rate;
+  double counted_sum = 0.0;
+  using Clock = std::chrono::steady_clock;
+  for (std::size_t k = 0;; ++k) {
+    const double t = t0 + static_cast<double>(k) * dt;
+    if (t > t_end) break;
+    Scene scene = walls;
+    std::vector<int> present;
+    for (auto& [id, w] : walkers) {
+      const auto p = traj.positionAt(id, t);
+      if (!p) {
+        last_pos.erase(id);
+        continue;
+      }
+      const auto prev = last_pos.find(id);
+      if (prev != last_pos.end()) {
+        const Eigen::Vector2d step = *p - prev->second;
+        if (step.norm() > 0.02) w.heading = std::atan2(step.y(), step.x());
+        advanceGait(w, step.norm(), dt);
+      }
+      last_pos[id] = *p;
+      w.position = *p;
+      addWalker(scene, w, id);
+      present.push_back(id);
+    }
+    const Pose2 pose = robot.at(t, t0);
+    const SimScan sim = renderScan(scene, pose, laser, t, rng);
+
+    // Ground truth: people within range and line of sight.
+    std::map<int, int> beams_on;
+    for (int obj : sim.hit_object)
+      if (obj >= 0 && scene.object_person[static_cast<std::size_t>(obj)] >= 0)
+        ++beams_on[scene.object_person[static_cast<std::size_t>(obj)]];
+    std::vector<MotObject> gt;
+    std::vector<Eigen::Vector2d> dont_care;
+    for (int id : present) {
+      const Eigen::Vector2d p = walkers[id].position;
+      const bool in_range = (p - Eigen::Vector2d(pose.x, pose.y)).norm() <= params.sensor_range;
+      if (in_range && beams_on[id] >= params.min_visible_beams) gt.push_back({id, p});
+      else dont_care.push_back(p);
+    }
+    counted_sum += static_cast<double>(gt.size());
+
+    const auto c0 = Clock::now();
+    const auto dets = detector.detect(sim.scan);
+    const auto c1 = Clock::now();
+    tracker.update(t, dets, pose);
+    const auto c2 = Clock::now();
+    std::vector<PersonDetection> dets_frame = dets;
+    for (auto& d : dets_frame) d.position = pose.transform(d.position);
+    baseline.update(t, dets_frame);
+    const auto c3 = Clock::now();
+    const double detect_s = std::chrono::duration<double>(c1 - c0).count();
+    result.cairn.process_seconds += detect_s + std::chrono::duration<double>(c2 - c1).count();
+    result.baseline.process_seconds += detect_s + std::chrono::duration<double>(c3 - c2).count();
+
+    auto inRange = [&](const Eigen::Vector2d& p) {
+      return (p - Eigen::Vector2d(pose.x, pose.y)).norm() <= params.sensor_range;
+    };
+    std::vector<MotObject> hyp, hyp_base;
+    for (const Track& tr : tracker.confirmedTracks())
+      if (inRange(tr.position())) hyp.push_back({tr.id, tr.position()});
+    for (const MotObject& o : baseline.confirmed())
+      if (inRange(o.p)) hyp_base.push_back(o);
+    mot.addFrame(gt, hyp, dont_care);
+    mot_base.addFrame(gt, hyp_base, dont_care);
+    if (gt_csv.is_open()) {
+      for (const auto& g : gt) gt_csv << t << ',' << g.id << ',' << g.p.x() << ',' << g.p.y() << '\n';
+      for (const auto& h : hyp) tr_csv << t << ',' << h.id << ',' << h.p.x() << ',' << h.p.y() << '\n';
+    }
+    ++result.scans;
+  }
+  result.duration = static_cast<double>(result.scans) * dt;
+  result.mean_people_counted = result.scans ? counted_sum / static_cast<double>(result.scans) : 0.0;
+  result.cairn.mot = mot.metrics();
+  result.baseline.mot = mot_base.metrics();
+  return result;
+}
+
+std::string benchJson(const BenchParams& p, const BenchResult& r) {
+  auto run = [&](const BenchRun& b) {
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "{\"mota\": %.4f, \"motp\": %.4f, \"id_switches\": %zu, \"id_switches_per_100_tracks\": %.3f, "
+                  "\"fp\": %zu, \"fn\": %zu, \"matches\": %zu, \"gt\": %zu, \"gt_tracks\": %zu, "
+                  "\"scans_per_second\": %.1f}",
+                  b.mot.mota(), b.mot.motp(), b.mot.id_switches, b.mot.idSwitchesPer100Tracks(), b.mot.fp, b.mot.fn,
+                  b.mot.matches, b.mot.gt, b.mot.gt_tracks, b.scansPerSecond(r.scans));
+    return std::string(buf);
+  };
+  std::ostringstream o;
+  o << "{\"trajectories\": \"" << p.trajectories << "\", \"format\": \"" << r.format << "\", \"world\": \"" << p.world
+    << "\", \"robot\": \"" << (p.robot_path.empty() ? "static" : p.robot_path) << "\", \"seed\": " << p.seed
+    << ", \"association\": \"" << toString(p.tracker.association) << "\", \"scan_rate\": " << p.scan_rate
+    << ", \"scans\": " << r.scans << ", \"duration_s\": " << r.duration << ", \"people_in_file\": " << r.people_in_file
+    << ", \"mean_people_counted\": " << r.mean_people_counted << ", \"match_threshold_m\": " << p.match_threshold
+    << ", \"sensor_range_m\": " << p.sensor_range << ", \"cairn\": " << run(r.cairn)
+    << ", \"baseline\": " << run(r.baseline) << ", \"baseline_name\": \"greedy nearest neighbour, no motion model\"}";
+  return o.str();
+}
+
+}  // namespace cairn::people_tracking

@@ -1,0 +1,66 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+#include "cairn/people_tracking/bench.hpp"
+
+using namespace cairn::people_tracking;
+
+namespace {
+BenchParams excerpt() {
+  BenchParams p;
+  p.trajectories = std::string(CAIRN_SOURCE_ROOT) + "/test/data/people/eth_seq_eth_obsmat_head400.txt";
+  p.seed = 3;
+  return p;
+}
+}  // namespace
+
+TEST(Bench, EthExcerptStaticRobotBeatsBaseline) {
+  const BenchParams p = excerpt();
+  const BenchResult r = runBench(p);
+  EXPECT_GT(r.scans, 250u);
+  EXPECT_GT(r.mean_people_counted, 2.0);
+  EXPECT_GT(r.cairn.mot.mota(), 0.6);
+  EXPECT_LT(r.cairn.mot.motp(), 0.2);
+  EXPECT_GT(r.cairn.mot.mota(), r.baseline.mot.mota() + 0.1);
+  EXPECT_LT(r.cairn.mot.id_switches, r.baseline.mot.id_switches);
+  const std::string json = benchJson(p, r);
+  for (const char* key : {"\"mota\"", "\"motp\"", "\"id_switches\"", "\"fp\"", "\"fn\"", "\"scans_per_second\"", "\"baseline\""})
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+}
+
+TEST(Bench, SameSeedSameResultAndDumpFiles) {
+  BenchParams p = excerpt();
+  p.duration = 8.0;
+  p.robot_path = "circle:2.0";
+  p.tracker.association = Association::kJpda;
+  p.dump_dir = (std::filesystem::temp_directory_path() / ("cairn_pt_dump_" + std::to_string(::getpid()))).string();
+  const BenchResult a = runBench(p);
+  const BenchResult b = runBench(p);
+  EXPECT_EQ(a.cairn.mot.matches, b.cairn.mot.matches);
+  EXPECT_EQ(a.cairn.mot.fp, b.cairn.mot.fp);
+  EXPECT_EQ(a.cairn.mot.id_switches, b.cairn.mot.id_switches);
+  EXPECT_GT(a.cairn.mot.mota(), 0.4);
+  std::ifstream gt(p.dump_dir + "/groundtruth.csv"), tr(p.dump_dir + "/tracks.csv");
+  std::string line;
+  std::size_t gt_rows = 0;
+  std::getline(gt, line);
+  EXPECT_EQ(line, "t,id,x,y");
+  while (std::getline(gt, line)) ++gt_rows;
+  EXPECT_EQ(gt_rows, a.cairn.mot.gt);
+  std::filesystem::remove_all(p.dump_dir);
+}
+
+TEST(Bench, BadInputs) {
+  BenchParams p = excerpt();
+  p.world = "apartment";
+  EXPECT_THROW(runBench(p), InputError);
+  p = excerpt();
+  p.robot_path = "circle:abc";
+  EXPECT_THROW(runBench(p), InputError);
+  p = excerpt();
+  p.model = "/nonexistent/model.yml";
+  EXPECT_THROW(runBench(p), InputError);
+}

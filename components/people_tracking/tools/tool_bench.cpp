@@ -1,0 +1,52 @@
+#include "tool_bench.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "cairn/people_tracking/bench.hpp"
+
+using namespace cairn::people_tracking;
+
+int runBenchVerb(int argc, char** argv) {
+  BenchParams p;
+  bool json = false;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw InputError("option " + a + " needs a value");
+      return argv[++i];
+    };
+    auto number = [&](const std::string& v) {
+      char* end = nullptr;
+      const double x = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end != '\0') throw InputError("option " + a + " expects a number, got '" + v + "'");
+      return x;
+    };
+    if (a == "--json") json = true;
+    else if (a == "--world") p.world = value();
+    else if (a == "--trajectories") p.trajectories = value();
+    else if (a == "--robot-path") p.robot_path = value();
+    else if (a == "--seed") p.seed = static_cast<std::uint64_t>(number(value()));
+    else if (a == "--duration") p.duration = number(value());
+    else if (a == "--start") p.start = number(value());
+    else if (a == "--rate") p.scan_rate = number(value());
+    else if (a == "--model") p.model = value();
+    else if (a == "--association") p.tracker.association = associationFromString(value());
+    else if (a == "--dump") p.dump_dir = value();
+    else throw InputError("unknown bench option '" + a + "'");
+  }
+  if (p.trajectories.empty()) throw InputError("bench needs --trajectories FILE");
+  const BenchResult r = runBench(p);
+  if (json) {
+    std::printf("%s\n", benchJson(p, r).c_str());
+  } else {
+    std::printf("%s (%s): %zu scans, %.1f s, %.1f people counted per scan on average\n", p.trajectories.c_str(),
+                r.format.c_str(), r.scans, r.duration, r.mean_people_counted);
+    for (const auto& [name, b] : {std::pair{"cairn", &r.cairn}, std::pair{"baseline", &r.baseline}})
+      std::printf("  %-8s MOTA %.3f  MOTP %.3f m  IDSW %zu (%.2f per 100 tracks)  FP %zu  FN %zu  %.0f scans/s\n", name,
+                  b->mot.mota(), b->mot.motp(), b->mot.id_switches, b->mot.idSwitchesPer100Tracks(), b->mot.fp,
+                  b->mot.fn, b->scansPerSecond(r.scans));
+  }
+  return 0;
+}
