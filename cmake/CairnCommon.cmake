@@ -92,3 +92,20 @@ function(cairn_install_package pkg)
     "include(CMakeFindDependencyMacro)\n${deps}include(\${CMAKE_CURRENT_LIST_DIR}/cmake/${pkg}Targets.cmake)\n")
   install(FILES ${CMAKE_CURRENT_BINARY_DIR}/${pkg}Config.cmake DESTINATION share/${pkg})
 endfunction()
+
+# cairn_add_component(target SOURCES ... CLASSES ns::A ns::B LIBS ...)
+# A shared library of components plus its index file <lib>.components (one class per line), both in
+# lib/cairn_components/ of the build tree and of the install prefix, where the container looks for them.
+function(cairn_add_component target)
+  cmake_parse_arguments(ARG "" "" "SOURCES;CLASSES;LIBS" ${ARGN})
+  add_library(${target} SHARED ${ARG_SOURCES})
+  target_link_libraries(${target} PUBLIC ${ARG_LIBS})
+  cairn_target_warnings(${target})
+  set_target_properties(${target} PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${CAIRN_COMPONENT_OUTPUT_DIR})
+  string(REPLACE ";" "\n" _classes "${ARG_CLASSES}")
+  file(GENERATE OUTPUT ${CAIRN_COMPONENT_OUTPUT_DIR}/$<TARGET_FILE_NAME:${target}>.components
+       CONTENT "${_classes}\n")
+  include(GNUInstallDirs)
+  install(TARGETS ${target} LIBRARY DESTINATION lib/cairn_components)
+  install(FILES ${CAIRN_COMPONENT_OUTPUT_DIR}/$<TARGET_FILE_NAME:${target}>.components DESTINATION lib/cairn_components)
+endfunction()

@@ -1,6 +1,8 @@
 #include "cairn/context.hpp"
 
 #include <algorithm>
+#include <unistd.h>
+
 #include <cstdlib>
 #include <random>
 #include <stdexcept>
@@ -47,7 +49,12 @@ int32_t Context::participant() {
   if (opts_.dry_run) throw std::logic_error("a dry-run context has no DDS participant");
   std::lock_guard l(mu_);
   if (participant_ <= 0) {
-    participant_ = dds_create_participant(static_cast<dds_domainid_t>(domain_id_), nullptr, nullptr);
+    // USER_DATA marks cairn processes, so that `cairn node list` can tell them from other DDS participants
+    dds_qos_t* q = dds_create_qos();
+    const std::string ud = "cairn:pid=" + std::to_string(getpid()) + ";";
+    dds_qset_userdata(q, ud.data(), ud.size());
+    participant_ = dds_create_participant(static_cast<dds_domainid_t>(domain_id_), q, nullptr);
+    dds_delete_qos(q);
     if (participant_ < 0) {
       throw std::runtime_error(std::string("cannot create DDS participant on domain ") + std::to_string(domain_id_) +
                                ": " + dds_strretcode(participant_) + " (check CYCLONEDDS_URI)");
@@ -109,6 +116,16 @@ void Context::remove_node(const std::string& fqn) {
   if (it != nodes_.end()) nodes_.erase(it);
   records_.erase(std::remove_if(records_.begin(), records_.end(), [&](const auto& r) { return r.node == fqn; }),
                  records_.end());
+}
+
+void Context::note_unused_parameters(UnusedParameters u) {
+  std::lock_guard l(rec_mu_);
+  unused_.push_back(std::move(u));
+}
+
+std::vector<Context::UnusedParameters> Context::unused_parameters() const {
+  std::lock_guard l(rec_mu_);
+  return unused_;
 }
 
 std::vector<std::string> Context::nodes() const {

@@ -76,20 +76,26 @@ int DdsWriter::matched() const {
 }
 
 DdsReader::DdsReader(Context& ctx, const std::string& dds_topic, const msgs::TypeSupport& ts, const QoS& qos,
-                     const DdsEndpointOptions& opts, std::function<void()> on_data)
+                     const DdsEndpointOptions& opts, DataCallback on_data)
     : ts_(ts), on_data_(std::move(on_data)) {
   const int32_t topic = ctx.topic(dds_topic, ts);
   dds_qos_t* q = endpoint_qos(qos, opts);
-  dds_listener_t* l = dds_create_listener(this);
-  dds_lset_data_available(l, [](dds_entity_t, void* arg) {
-    auto* self = static_cast<DdsReader*>(arg);
-    if (self->on_data_) self->on_data_();
-  });
-  reader_ = dds_create_reader(ctx.participant(), topic, q, on_data_ ? l : nullptr);
-  dds_delete_listener(l);
+  const dds_entity_t r = dds_create_reader(ctx.participant(), topic, q, nullptr);
   dds_delete_qos(q);
-  if (reader_ < 0) {
-    throw std::runtime_error("cannot create DDS reader on '" + dds_topic + "': " + dds_strretcode(reader_));
+  if (r < 0) {
+    throw std::runtime_error("cannot create DDS reader on '" + dds_topic + "': " + dds_strretcode(r));
+  }
+  reader_ = r;
+  if (on_data_) {
+    // attached only now that the object is complete: the callback may run at once on a Cyclone thread
+    dds_listener_t* l = dds_create_listener(this);
+    dds_lset_data_available(l, [](dds_entity_t, void* arg) {
+      auto* self = static_cast<DdsReader*>(arg);
+      self->on_data_(*self);
+    });
+    dds_set_listener(reader_, l);
+    dds_delete_listener(l);
+    on_data_(*this);  // whatever arrived before the listener was attached
   }
 }
 

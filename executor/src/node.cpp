@@ -109,7 +109,13 @@ Node::~Node() {
   for (auto& s : subs) s->shutdown();
   for (auto& s : services) s->shutdown();
   clock_sub_.reset();
-  ctx_->remove_node(fqn_);
+  if (ctx_->dry_run()) {
+    if (auto unused = params_.unused_overrides(); !unused.empty()) {
+      ctx_->note_unused_parameters({fqn_, unused, params_.names()});
+    }
+  } else {
+    ctx_->remove_node(fqn_);
+  }
 }
 
 std::string Node::resolve_name(const std::string& name) const {

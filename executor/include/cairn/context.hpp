@@ -66,6 +66,15 @@ class Context {
   void remove_node(const std::string& fqn);
   std::vector<std::string> nodes() const;
 
+  /// Parameters given to a node that it never declared (reported by dry-run nodes on destruction).
+  struct UnusedParameters {
+    std::string node;
+    std::vector<std::string> names;
+    std::vector<std::string> declared;
+  };
+  void note_unused_parameters(UnusedParameters u);
+  std::vector<UnusedParameters> unused_parameters() const;
+
  private:
   explicit Context(ContextOptions opts);
   ContextOptions opts_;
@@ -79,6 +88,7 @@ class Context {
   mutable std::mutex rec_mu_;
   std::vector<EndpointRecord> records_;
   std::vector<std::string> nodes_;
+  std::vector<UnusedParameters> unused_;
 };
 
 /// Domain id from the environment ($CAIRN_DOMAIN_ID, $ROS_DOMAIN_ID, else 0).

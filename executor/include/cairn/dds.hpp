@@ -46,9 +46,11 @@ class DdsWriter {
 
 class DdsReader {
  public:
-  /// `on_data` runs on a Cyclone thread whenever data arrives; keep it short (schedule work).
+  using DataCallback = std::function<void(DdsReader&)>;
+  /// `on_data` runs on a Cyclone thread whenever data arrives (and once at the end of construction, for
+  /// data that arrived before the listener was attached); keep it short (schedule work).
   DdsReader(Context& ctx, const std::string& dds_topic, const msgs::TypeSupport& ts, const QoS& qos,
-            const DdsEndpointOptions& opts, std::function<void()> on_data);
+            const DdsEndpointOptions& opts, DataCallback on_data);
   ~DdsReader();
   DdsReader(const DdsReader&) = delete;
   DdsReader& operator=(const DdsReader&) = delete;
@@ -60,7 +62,7 @@ class DdsReader {
  private:
   Gid publisher_gid(uint64_t publication_handle);
   const msgs::TypeSupport& ts_;
-  std::function<void()> on_data_;
+  DataCallback on_data_;
   int32_t reader_ = 0;
   std::map<uint64_t, std::pair<Gid, uint64_t>> pubs_;  // publication handle -> (guid, reception count)
 };

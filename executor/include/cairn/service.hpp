@@ -69,7 +69,7 @@ class Service : public ServiceBase {
     q.keep_all();
     writer_ = std::make_shared<DdsWriter>(ctx, detail::reply_topic(name_), msgs::type_support<Resp>(), q, opts);
     reader_ = std::make_unique<DdsReader>(ctx, detail::request_topic(name_), msgs::type_support<Req>(), q, opts,
-                                          [weak, exec] {
+                                          [weak, exec](DdsReader&) {
                                             if (auto s = weak.lock()) exec->schedule(s);
                                           });
   }
@@ -134,7 +134,7 @@ class Client {
     q.keep_all();
     writer_ = std::make_unique<DdsWriter>(ctx, detail::request_topic(name_), msgs::type_support<Req>(), q, opts);
     reader_ = std::make_unique<DdsReader>(ctx, detail::reply_topic(name_), msgs::type_support<Resp>(), q, opts,
-                                          [this] { on_reply(); });
+                                          [this](DdsReader& r) { on_reply(r); });
     client_id_ = detail::client_id_from_gid(detail::reader_gid(reader_->entity()));
   }
   ~Client() { reader_.reset(); }
@@ -183,12 +183,12 @@ class Client {
   }
 
  private:
-  void on_reply() {
+  void on_reply(DdsReader& reader) {
     std::lock_guard l(mu_);
     for (;;) {
       Resp resp;
       MessageInfo info;
-      if (!reader_->take(&resp, info)) return;
+      if (!reader.take(&resp, info)) return;
       if (resp.request_header.client_guid != client_id_) continue;  // another client's reply
       auto it = pending_.find(resp.request_header.sequence_number);
       if (it == pending_.end()) continue;  // timed out already

@@ -76,7 +76,7 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
     if (dds && ctx) {
       std::weak_ptr<Subscription<T>> weak = self;
       reader_ = std::make_unique<DdsReader>(*ctx, dds_topic_name(topic_), msgs::type_support<T>(), qos_, opts,
-                                            [weak] {
+                                            [weak](DdsReader&) {
                                               if (auto s = weak.lock()) s->exec_->schedule(s);
                                             });
     }

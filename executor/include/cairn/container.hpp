@@ -1,0 +1,82 @@
+// The component container: loads components by class name into one process and serves
+// <container>/_container/load_node, unload_node and list_nodes (composition_interfaces) over DDS.
+#ifndef CAIRN_CONTAINER_HPP
+#define CAIRN_CONTAINER_HPP
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "cairn/component.hpp"
+#include "cairn/node.hpp"
+
+namespace cairn {
+
+struct LoadRequest {
+  std::string class_name;
+  std::string node_name;  ///< empty: derived from the class name (Talker -> talker)
+  std::string node_namespace = "/";
+  std::map<std::string, ParameterValue> parameters;
+  std::map<std::string, std::string> remaps;
+  std::map<std::string, QoSOverride> qos_overrides;
+  bool use_intra_process = true;
+};
+
+struct LoadResult {
+  bool ok = false;
+  std::string error;
+  std::string full_node_name;
+  uint64_t unique_id = 0;
+};
+
+class ComponentManager {
+ public:
+  struct Options {
+    std::chrono::milliseconds load_timeout{10000};
+  };
+  ComponentManager(std::shared_ptr<Context> ctx, Executor& exec, const std::string& name, ComponentLoader& loader,
+                   Options opts);
+  ComponentManager(std::shared_ptr<Context> ctx, Executor& exec, const std::string& name, ComponentLoader& loader)
+      : ComponentManager(std::move(ctx), exec, name, loader, Options{}) {}
+  ~ComponentManager();
+
+  /// Constructs the component (at most load_timeout; a constructor that throws or hangs gives an error and
+  /// leaves the container serving its other components).
+  LoadResult load(const LoadRequest& req);
+  std::optional<std::string> unload(uint64_t id);
+  std::vector<std::pair<uint64_t, std::string>> list() const;
+  const std::string& name() const { return name_; }
+
+ private:
+  struct Loaded {
+    std::string fqn;
+    std::string class_name;
+    std::shared_ptr<void> object;
+  };
+  std::shared_ptr<Context> ctx_;
+  Executor& exec_;
+  std::string name_;
+  ComponentLoader& loader_;
+  Options opts_;
+  std::unique_ptr<Node> node_;
+  mutable std::mutex mu_;
+  uint64_t next_id_ = 1;
+  std::map<uint64_t, Loaded> loaded_;
+  std::vector<std::thread> workers_;
+};
+
+/// "Talker" / "cairn_demo::Talker" / "ScanMatcherNode" -> "talker" / "talker" / "scan_matcher_node"
+std::string default_node_name(const std::string& class_name);
+
+/// Runs `cairn container --name N [--threads K] [--load-timeout S]` until SIGINT/SIGTERM. Returns the exit code.
+int run_container_main(int argc, char** argv);
+
+}  // namespace cairn
+
+#endif  // CAIRN_CONTAINER_HPP

@@ -1,0 +1,511 @@
+#include "cairn/launch.hpp"
+
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include <yaml-cpp/yaml.h>
+
+#include "cairn/container.hpp"
+#include "cairn/parameter_msgs.hpp"
+#include "composition_interfaces/srv/LoadNode.hpp"
+
+namespace cairn {
+
+namespace {
+
+int line_of(const YAML::Node& n) { return n.Mark().line >= 0 ? n.Mark().line + 1 : 0; }
+
+class SpecParser {
+ public:
+  explicit SpecParser(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const YAML::Node& n, const std::string& what) const { throw LaunchError(file_, line_of(n), what); }
+
+  void allow_keys(const YAML::Node& map, const std::string& where, std::initializer_list<const char*> keys) const {
+    for (const auto& kv : map) {
+      const std::string k = kv.first.as<std::string>();
+      bool ok = false;
+      for (const char* a : keys) ok = ok || k == a;
+      if (!ok) {
+        std::string list;
+        for (const char* a : keys) list += (list.empty() ? "" : ", ") + std::string(a);
+        fail(kv.first, where + ": unknown key '" + k + "' (allowed: " + list + ")");
+      }
+    }
+  }
+
+  std::string str(const YAML::Node& n, const std::string& key) const {
+    if (!n.IsScalar()) fail(n, key + ": expected a string");
+    return n.Scalar();
+  }
+
+  bool boolean(const YAML::Node& n, const std::string& key) const {
+    bool b;
+    if (!n.IsScalar() || !YAML::convert<bool>::decode(n, b)) fail(n, key + ": expected true or false");
+    return b;
+  }
+
+  double number(const YAML::Node& n, const std::string& key, double lo, double hi) const {
+    if (!n.IsScalar()) fail(n, key + ": expected a number");
+    try {
+      std::size_t pos = 0;
+      const double v = std::stod(n.Scalar(), &pos);
+      if (pos != n.Scalar().size()) throw std::invalid_argument("trailing");
+      if (v < lo || v > hi) fail(n, key + ": " + n.Scalar() + " is outside [" + fmt(lo) + ", " + fmt(hi) + "]");
+      return v;
+    } catch (const LaunchError&) {
+      throw;
+    } catch (...) {
+      fail(n, key + ": expected a number, got '" + n.Scalar() + "'");
+    }
+  }
+
+  static std::string fmt(double v) {
+    std::ostringstream o;
+    o << v;
+    return o.str();
+  }
+
+  LaunchSpec parse(const YAML::Node& root) {
+    LaunchSpec spec;
+    spec.file = file_;
+    if (!root.IsMap()) fail(root, "a launch spec is a map with 'containers' and/or 'processes'");
+    allow_keys(root, "spec", {"domain_id", "load_timeout", "containers", "processes"});
+    if (root["domain_id"]) spec.domain_id = static_cast<int>(number(root["domain_id"], "domain_id", 0, 232));
+    if (root["load_timeout"]) spec.load_timeout_s = number(root["load_timeout"], "load_timeout", 0.1, 3600);
+    std::set<std::string> names, fqns;
+    if (const auto cs = root["containers"]) {
+      if (!cs.IsSequence()) fail(cs, "containers: expected a list");
+      for (const auto& c : cs) spec.containers.push_back(container(c, names, fqns));
+    }
+    if (const auto ps = root["processes"]) {
+      if (!ps.IsSequence()) fail(ps, "processes: expected a list");
+      for (const auto& p : ps) spec.processes.push_back(process(p, names));
+    }
+    if (spec.containers.empty() && spec.processes.empty()) fail(root, "spec: nothing to launch (no containers, no processes)");
+    return spec;
+  }
+
+  LaunchContainer container(const YAML::Node& n, std::set<std::string>& names, std::set<std::string>& fqns) {
+    if (!n.IsMap()) fail(n, "containers[]: expected a map");
+    allow_keys(n, "container", {"name", "threads", "components"});
+    LaunchContainer c;
+    c.line = line_of(n);
+    if (!n["name"]) fail(n, "container: missing 'name'");
+    c.name = str(n["name"], "container.name");
+    if (!valid_name(c.name)) fail(n["name"], "container.name: '" + c.name + "' is not a valid node name");
+    if (!names.insert(c.name).second) fail(n["name"], "container.name: duplicate name '" + c.name + "'");
+    if (n["threads"]) c.threads = static_cast<std::size_t>(number(n["threads"], "container.threads", 1, 64));
+    if (const auto comps = n["components"]) {
+      if (!comps.IsSequence()) fail(comps, "container.components: expected a list");
+      for (const auto& x : comps) c.components.push_back(component(x, fqns));
+    }
+    return c;
+  }
+
+  LaunchComponent component(const YAML::Node& n, std::set<std::string>& fqns) {
+    if (!n.IsMap()) fail(n, "components[]: expected a map");
+    allow_keys(n, "component", {"class", "name", "namespace", "params", "remap", "qos", "isolated", "intra_process"});
+    LaunchComponent c;
+    c.line = line_of(n);
+    if (!n["class"]) fail(n, "component: missing 'class'");
+    c.class_name = str(n["class"], "component.class");
+    c.name = n["name"] ? str(n["name"], "component.name") : default_node_name(c.class_name);
+    if (!valid_name(c.name)) fail(n["name"] ? n["name"] : n, "component.name: '" + c.name + "' is not a valid node name");
+    if (n["namespace"]) {
+      c.ns = str(n["namespace"], "component.namespace");
+      if (c.ns.empty() || c.ns[0] != '/') c.ns = "/" + c.ns;
+    }
+    if (!fqns.insert(c.fqn()).second) fail(n, "component: duplicate node name '" + c.fqn() + "'");
+    if (const auto p = n["params"]) {
+      c.params_line = line_of(p);
+      if (!p.IsMap()) fail(p, "component.params: expected a map of name: value");
+      for (const auto& kv : p) {
+        const std::string k = kv.first.as<std::string>();
+        try {
+          c.params[k] = parameter_from_yaml(kv.second);
+        } catch (const std::exception& e) {
+          fail(kv.second, "params." + k + ": " + e.what());
+        }
+      }
+    }
+    if (const auto r = n["remap"]) {
+      c.remap_line = line_of(r);
+      if (!r.IsMap()) fail(r, "component.remap: expected a map of from: to");
+      for (const auto& kv : r) c.remaps[kv.first.as<std::string>()] = str(kv.second, "remap." + kv.first.as<std::string>());
+    }
+    if (const auto q = n["qos"]) {
+      c.qos_line = line_of(q);
+      if (!q.IsMap()) fail(q, "component.qos: expected a map of topic: {key: value}");
+      for (const auto& kv : q) {
+        const std::string topic = kv.first.as<std::string>();
+        if (!kv.second.IsMap()) fail(kv.second, "qos." + topic + ": expected a map");
+        QoSOverride o;
+        for (const auto& f : kv.second) {
+          const std::string key = f.first.as<std::string>();
+          if (auto err = o.set(key, str(f.second, "qos." + topic + "." + key))) fail(f.first, "qos." + topic + ": " + *err);
+        }
+        c.qos[topic] = o;
+      }
+    }
+    if (n["isolated"]) c.isolated = boolean(n["isolated"], "component.isolated");
+    if (n["intra_process"]) c.use_intra_process = boolean(n["intra_process"], "component.intra_process");
+    return c;
+  }
+
+  LaunchProcess process(const YAML::Node& n, std::set<std::string>& names) {
+    if (!n.IsMap()) fail(n, "processes[]: expected a map");
+    allow_keys(n, "process", {"name", "cmd", "respawn"});
+    LaunchProcess p;
+    p.line = line_of(n);
+    if (!n["name"]) fail(n, "process: missing 'name'");
+    p.name = str(n["name"], "process.name");
+    if (!names.insert(p.name).second) fail(n["name"], "process.name: duplicate name '" + p.name + "'");
+    if (!n["cmd"] || !n["cmd"].IsSequence() || n["cmd"].size() == 0) fail(n, "process.cmd: expected a non-empty list");
+    for (const auto& a : n["cmd"]) p.cmd.push_back(str(a, "process.cmd[]"));
+    if (n["respawn"]) p.respawn = boolean(n["respawn"], "process.respawn");
+    return p;
+  }
+
+  static bool valid_name(const std::string& s) {
+    return !s.empty() && !std::isdigit(static_cast<unsigned char>(s[0])) &&
+           std::all_of(s.begin(), s.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+  }
+
+ private:
+  std::string file_;
+};
+
+/// Resolves a remap key/value the way the node will (relative names live in the component's namespace).
+std::string resolve_in(const std::string& ns, const std::string& name) {
+  if (!name.empty() && name[0] == '/') return name;
+  return (ns == "/" ? "" : ns) + "/" + name;
+}
+
+}  // namespace
+
+LaunchSpec parse_launch_spec_text(const std::string& text, const std::string& file) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw LaunchError(file, e.mark.line >= 0 ? e.mark.line + 1 : 0, "YAML syntax error: " + e.msg);
+  }
+  try {
+    return SpecParser(file).parse(root);
+  } catch (const LaunchError&) {
+    throw;
+  } catch (const YAML::Exception& e) {
+    throw LaunchError(file, e.mark.line >= 0 ? e.mark.line + 1 : 0, e.msg);
+  }
+}
+
+LaunchSpec parse_launch_spec(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw LaunchError(path, 0, "cannot read the file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_launch_spec_text(ss.str(), path);
+}
+
+void validate_launch_spec(const LaunchSpec& spec, ComponentLoader& loader) {
+  struct End {
+    EndpointRecord rec;
+    const LaunchComponent* comp;
+  };
+  std::map<std::string, std::vector<End>> topics;
+  for (const auto& cont : spec.containers) {
+    for (const auto& c : cont.components) {
+      const ComponentFactory* factory = nullptr;
+      try {
+        factory = &loader.factory(c.class_name);
+      } catch (const std::exception& e) {
+        throw LaunchError(spec.file, c.line, "component.class: " + std::string(e.what()));
+      }
+      auto ctx = Context::create(ContextOptions{-1, true});
+      NodeOptions no(c.name, nullptr);
+      no.namespace_ = c.ns;
+      no.context = ctx;
+      no.parameter_overrides = c.params;
+      for (const auto& [from, to] : c.remaps) no.remaps[resolve_in(c.ns, from)] = to;
+      for (const auto& [topic, o] : c.qos) no.qos_overrides[resolve_in(c.ns, topic)] = o;
+      no.use_intra_process = c.use_intra_process;
+      std::shared_ptr<void> obj;
+      try {
+        obj = (*factory)(no);
+      } catch (const ParameterError& e) {
+        throw LaunchError(spec.file, c.params_line ? c.params_line : c.line, "params: " + c.fqn() + ": " + e.what());
+      } catch (const std::exception& e) {
+        throw LaunchError(spec.file, c.line, c.class_name + " (" + c.fqn() + ") cannot be constructed: " + e.what());
+      }
+      obj.reset();  // the node reports parameters nobody declared as it goes
+      for (const auto& u : ctx->unused_parameters()) {
+        std::string declared;
+        for (const auto& d : u.declared) declared += (declared.empty() ? "" : ", ") + d;
+        throw LaunchError(spec.file, c.params_line ? c.params_line : c.line,
+                          "params." + u.names.front() + ": " + c.class_name + " (" + c.fqn() +
+                              ") has no such parameter (declared: " + declared + ")");
+      }
+      for (const auto& r : ctx->records()) {
+        if (r.kind == EndpointRecord::Kind::Publisher || r.kind == EndpointRecord::Kind::Subscription) {
+          topics[r.topic].push_back(End{r, &c});
+        }
+      }
+    }
+  }
+  for (const auto& [topic, ends] : topics) {
+    for (const auto& e : ends) {
+      if (e.rec.type != ends.front().rec.type) {
+        const auto& a = ends.front();
+        throw LaunchError(spec.file, e.comp->remap_line ? e.comp->remap_line : e.comp->line,
+                          "topic " + topic + ": " + e.comp->fqn() + " uses " + e.rec.type + " but " + a.comp->fqn() +
+                              " uses " + a.rec.type + " (a remapping joins two message types)");
+      }
+    }
+    for (const auto& p : ends) {
+      if (p.rec.kind != EndpointRecord::Kind::Publisher) continue;
+      for (const auto& s : ends) {
+        if (s.rec.kind != EndpointRecord::Kind::Subscription) continue;
+        if (auto why = qos_incompatibility(p.rec.qos, s.rec.qos)) {
+          throw LaunchError(spec.file, s.comp->qos_line ? s.comp->qos_line : s.comp->line,
+                            "topic " + topic + ": " + s.comp->fqn() + " never hears " + p.comp->fqn() + ": " + *why);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace cairn
+
+// ---------------------------------------------------------------------------------------------------
+// The launcher: containers as supervised child processes, components loaded over the DDS load_node service.
+#include "cairn/process.hpp"
+
+namespace cairn {
+
+namespace {
+
+struct RunningContainer {
+  std::string name;
+  std::size_t threads = 1;
+  std::vector<const LaunchComponent*> components;
+  pid_t pid = -1;
+  int restarts = 0;
+};
+
+composition_interfaces::srv::LoadNode_Request load_request(const LaunchComponent& c) {
+  composition_interfaces::srv::LoadNode_Request r;
+  r.plugin_name = c.class_name;
+  r.node_name = c.name;
+  r.node_namespace = c.ns;
+  for (const auto& [k, v] : c.params) {
+    rcl_interfaces::msg::Parameter p;
+    p.name = k;
+    p.value = to_parameter_msg(v);
+    r.parameters.push_back(p);
+  }
+  for (const auto& [from, to] : c.remaps) r.remap_rules.push_back(resolve_in(c.ns, from) + ":=" + to);
+  rcl_interfaces::msg::Parameter ipc;
+  ipc.name = "use_intra_process_comms";
+  ipc.value = to_parameter_msg(c.use_intra_process);
+  r.extra_arguments.push_back(ipc);
+  return r;
+}
+
+}  // namespace
+
+int run_launch_main(int argc, char** argv) {
+  std::string path;
+  double duration = 0;
+  bool check_only = false;
+  for (int i = 0; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--duration" && i + 1 < argc) {
+      duration = std::stod(argv[++i]);
+    } else if (a == "--check") {
+      check_only = true;
+    } else if (a == "-h" || a == "--help") {
+      std::cout << "usage: cairn launch <spec.yaml> [--duration SECONDS] [--check]\n"
+                   "  validates the whole spec (classes, parameters, topic types, QoS) before starting anything;\n"
+                   "  --check stops after validation, --duration stops the launch after SECONDS.\n";
+      return 0;
+    } else if (path.empty() && a[0] != '-') {
+      path = a;
+    } else {
+      std::cerr << "cairn: launch: unknown argument '" << a << "'\n";
+      return 2;
+    }
+  }
+  if (path.empty()) {
+    std::cerr << "cairn: launch: missing spec file (cairn launch <spec.yaml>)\n";
+    return 2;
+  }
+  LaunchSpec spec;
+  ComponentLoader loader;
+  try {
+    spec = parse_launch_spec(path);
+    validate_launch_spec(spec, loader);
+  } catch (const LaunchError& e) {
+    std::cerr << "cairn: " << e.what() << "\n";
+    return 2;
+  }
+  std::size_t ncomp = 0;
+  for (const auto& c : spec.containers) ncomp += c.components.size();
+  if (check_only) {
+    std::cout << path << ": ok (" << spec.containers.size() << " containers, " << ncomp << " components, "
+              << spec.processes.size() << " processes)\n";
+    return 0;
+  }
+  Executor::install_signal_handlers();
+  if (spec.domain_id) setenv("CAIRN_DOMAIN_ID", std::to_string(*spec.domain_id).c_str(), 1);
+  const Logger log("launch");
+  const std::string self = self_executable();
+
+  std::vector<RunningContainer> containers;
+  for (const auto& c : spec.containers) {
+    RunningContainer rc{c.name, c.threads, {}, -1, 0};
+    for (const auto& comp : c.components) {
+      if (comp.isolated) {
+        containers.push_back(RunningContainer{c.name + "__" + comp.name, 1, {&comp}, -1, 0});
+      } else {
+        rc.components.push_back(&comp);
+      }
+    }
+    containers.push_back(std::move(rc));
+  }
+
+  auto ctx = Context::default_context();
+  Executor exec;
+  NodeOptions no("launch_" + std::to_string(getpid()), &exec);
+  no.start_parameter_services = false;
+  Node node(no);
+  const auto load_timeout = std::chrono::milliseconds(static_cast<int64_t>(spec.load_timeout_s * 1000));
+
+  auto start = [&](RunningContainer& rc) -> bool {
+    rc.pid = spawn_process({self, "container", "--name", rc.name, "--threads", std::to_string(rc.threads),
+                            "--load-timeout", std::to_string(spec.load_timeout_s)});
+    auto client = node.create_client<composition_interfaces::srv::LoadNode_Request,
+                                     composition_interfaces::srv::LoadNode_Response>("/" + rc.name +
+                                                                                     "/_container/load_node");
+    if (!client->wait_for_service(std::chrono::seconds(20))) {
+      CAIRN_ERROR(log, "container " << rc.name << " did not offer its load_node service within 20 s");
+      return false;
+    }
+    for (const auto* comp : rc.components) {
+      auto resp = client->call(load_request(*comp), load_timeout + std::chrono::seconds(5));
+      if (!resp) {
+        std::cerr << "cairn: " << spec.file << ":" << comp->line << ": " << comp->fqn() << ": no reply from container "
+                  << rc.name << " to the load request\n";
+        return false;
+      }
+      if (!resp->success) {
+        std::cerr << "cairn: " << spec.file << ":" << comp->line << ": " << resp->error_message << "\n";
+        return false;
+      }
+      CAIRN_INFO(log, "loaded " << comp->class_name << " as " << resp->full_node_name << " into " << rc.name);
+    }
+    return true;
+  };
+
+  auto stop_all = [&](std::vector<pid_t> pids) {
+    for (pid_t p : pids)
+      if (p > 0) kill(p, SIGTERM);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    for (pid_t p : pids) {
+      if (p <= 0) continue;
+      int st;
+      while (waitpid(p, &st, WNOHANG) == 0) {
+        if (std::chrono::steady_clock::now() > deadline) {
+          kill(p, SIGKILL);
+          waitpid(p, &st, 0);
+          break;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+    }
+  };
+
+  std::vector<std::pair<const LaunchProcess*, pid_t>> procs;
+  auto all_pids = [&] {
+    std::vector<pid_t> p;
+    for (auto& c : containers) p.push_back(c.pid);
+    for (auto& [lp, pid] : procs) p.push_back(pid);
+    return p;
+  };
+
+  for (auto& rc : containers) {
+    bool ok = false;
+    try {
+      ok = start(rc);
+    } catch (const std::exception& e) {
+      std::cerr << "cairn: " << spec.file << ": container " << rc.name << ": " << e.what() << "\n";
+    }
+    if (!ok) {
+      stop_all(all_pids());
+      return 1;
+    }
+  }
+  for (const auto& p : spec.processes) {
+    try {
+      procs.emplace_back(&p, spawn_process(p.cmd));
+    } catch (const std::exception& e) {
+      std::cerr << "cairn: " << spec.file << ":" << p.line << ": process " << p.name << ": " << e.what() << "\n";
+      stop_all(all_pids());
+      return 1;
+    }
+  }
+  CAIRN_INFO(log, "running " << containers.size() << " containers, " << ncomp << " components, " << procs.size()
+                             << " processes" << (duration > 0 ? " for " + std::to_string(duration) + " s" : ""));
+
+  const auto t_end = duration > 0 ? std::chrono::steady_clock::now() + std::chrono::milliseconds(int64_t(duration * 1000))
+                                  : std::chrono::steady_clock::time_point::max();
+  int rc_exit = 0;
+  while (!Executor::signal_received() && std::chrono::steady_clock::now() < t_end) {
+    int status = 0;
+    const pid_t pid = waitpid(-1, &status, WNOHANG);
+    if (pid <= 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      continue;
+    }
+    for (auto& rc : containers) {
+      if (rc.pid != pid) continue;
+      rc.pid = -1;
+      ++rc.restarts;
+      CAIRN_ERROR(log, "container " << rc.name << " " << describe_wait_status(status) << "; respawning (restart "
+                                    << rc.restarts << ")");
+      bool ok = false;
+      try {
+        ok = start(rc);
+      } catch (const std::exception& e) {
+        CAIRN_ERROR(log, "respawn of " << rc.name << " failed: " << e.what());
+      }
+      if (!ok) CAIRN_ERROR(log, "container " << rc.name << " could not be restarted");
+    }
+    for (auto& [lp, ppid] : procs) {
+      if (ppid != pid) continue;
+      if (lp->respawn) {
+        CAIRN_WARN(log, "process " << lp->name << " " << describe_wait_status(status) << "; respawning");
+        ppid = spawn_process(lp->cmd);
+      } else {
+        CAIRN_INFO(log, "process " << lp->name << " " << describe_wait_status(status));
+        ppid = -1;
+      }
+    }
+  }
+  CAIRN_INFO(log, "stopping");
+  stop_all(all_pids());
+  return rc_exit;
+}
+
+}  // namespace cairn
