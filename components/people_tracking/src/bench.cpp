@@ -246,7 +246,7 @@ BenchResult runBench(const BenchParams& params) {
       return (p - Eigen::Vector2d(pose.x, pose.y)).norm() <= params.sensor_range;
     };
     std::vector<MotObject> hyp, hyp_base;
-    for (const Track& tr : tracker.confirmedTracks())
+    for (const Track& tr : tracker.outputTracks())
       if (inRange(tr.position())) hyp.push_back({tr.id, tr.position()});
     for (const MotObject& o : baseline.confirmed())
       if (inRange(o.p)) hyp_base.push_back(o);

@@ -33,6 +33,13 @@ std::vector<Track> PeopleTracker::confirmedTracks() const {
   return out;
 }
 
+std::vector<Track> PeopleTracker::outputTracks() const {
+  std::vector<Track> out;
+  for (const auto& t : tracks_)
+    if (t.confirmed && t.stamp - t.last_update <= params_.publish_coast_time) out.push_back(t);
+  return out;
+}
+
 TrackerStatus PeopleTracker::update(double stamp, const std::vector<PersonDetection>& detections,
                                     const Pose2& sensor_pose) {
   std::vector<PersonDetection> in_frame = detections;

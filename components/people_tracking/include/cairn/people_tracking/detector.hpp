@@ -32,7 +32,7 @@ struct DetectorParams {
   double max_range = 10.0;             // m, clusters beyond are ignored
   double max_leg_width = 0.45;         // m, wider clusters are not legs (also rejects most walls cheaply)
   double leg_center_offset = 0.04;     // m, leg centre lies behind the visible surface along the beam
-  double max_leg_pair_distance = 0.6;  // m, two legs closer than this form a person
+  double max_leg_pair_distance = 0.8;  // m, two legs closer than this form a person
   double single_leg_min_confidence = 0.6;  // an unpaired leg cluster needs this score to become a person
   double sigma_pair = 0.06;            // m, position std of a paired-leg person (both axes)
   double sigma_single = 0.15;          // m, position std of a single-cluster person (other leg unseen/merged)

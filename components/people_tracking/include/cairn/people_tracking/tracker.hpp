@@ -30,6 +30,7 @@ struct TrackerParams {
   double max_position_sigma = 1.5;      // m, tracks whose position std grows beyond this are deleted
   double min_init_distance = 0.45;      // m, no new track this close to an existing confirmed track
   double min_detection_confidence = 0.0;
+  double publish_coast_time = 0.25;     // s, outputTracks() omits confirmed tracks not updated for longer
   double max_dt = 2.0;                  // s, larger forward jumps reset the tracker
   double confidence_gain = 0.3;         // confidence <- confidence + gain * (hit - confidence)
   // JPDA
@@ -72,6 +73,9 @@ class PeopleTracker {
 
   [[nodiscard]] const std::vector<Track>& tracks() const { return tracks_; }  // tentative and confirmed
   [[nodiscard]] std::vector<Track> confirmedTracks() const;
+  // What a consumer should see: confirmed tracks updated within publish_coast_time (coasting tracks are kept
+  // internally through short occlusions, but are not reported as people).
+  [[nodiscard]] std::vector<Track> outputTracks() const;
   [[nodiscard]] const TrackerParams& params() const { return params_; }
   void reset();
 
