@@ -24,7 +24,7 @@ struct TrackerParams {
   double process_noise = 0.6;
   double initial_velocity_sigma = 0.8;  // m/s, velocity std of a new track
   double gate_chi2 = 9.21;              // 99 % gate, chi-square with 2 dof
-  int confirm_hits = 3;                 // tentative -> confirmed after this many associated scans
+  int confirm_hits = 2;                 // tentative -> confirmed after this many associated scans
   double tentative_timeout = 0.4;       // s without an update deletes a tentative track
   double delete_timeout = 1.5;          // s without an update deletes a confirmed track
   double max_position_sigma = 1.5;      // m, tracks whose position std grows beyond this are deleted
