@@ -1,7 +1,5 @@
 #include "block_system.hpp"
 
-#include <amd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -11,7 +9,8 @@
 
 namespace cairn::graph_slam::detail {
 
-void BlockSystem::build(const PoseGraph& graph, std::optional<std::size_t> gauge) {
+void BlockSystem::build(const PoseGraph& graph, std::optional<std::size_t> gauge, int ordering,
+                        int factorization) {
   const auto& vars = graph.variables();
   const auto& factors = graph.factors();
   const std::size_t nv = vars.size();
@@ -45,15 +44,9 @@ void BlockSystem::build(const PoseGraph& graph, std::optional<std::size_t> gauge
   ai.reserve(ap[nb]);
   for (int b = 0; b < nb; ++b) ai.insert(ai.end(), adj[b].begin(), adj[b].end());
 
-  // Fill-reducing ordering on the block graph (AMD); the scalar matrix is assembled already permuted.
-  std::vector<int> perm(nb), pos(nb);
-  if (nb > 0) {
-    double control[AMD_CONTROL], info[AMD_INFO];
-    amd_defaults(control);
-    int no_edges = 0;  // AMD rejects a null index array even when there are no entries
-    const int status = amd_order(nb, ap.data(), ai.empty() ? &no_edges : ai.data(), perm.data(), control, info);
-    if (status < AMD_OK) throw std::runtime_error("AMD ordering failed");
-  }
+  // Fill-reducing ordering on the block graph (one node per variable, so the ordering costs a fraction of a
+  // scalar one); the scalar matrix is then assembled already permuted and analyzed in natural order.
+  std::vector<int> perm = fillReducingOrdering(nb, ap, ai, ordering), pos(nb);
   for (int k = 0; k < nb; ++k) pos[perm[k]] = k;
 
   var_offset_.assign(nv, -1);
@@ -139,7 +132,7 @@ void BlockSystem::build(const PoseGraph& graph, std::optional<std::size_t> gauge
   }
 
   chol_.setPattern(n, col_ptr, row_idx);
-  if (n > 0) chol_.analyze(/*natural_ordering=*/true);
+  if (n > 0) chol_.analyze(/*natural_ordering=*/true, factorization);
 }
 
 namespace {

@@ -41,11 +41,11 @@ struct Optimizer::Impl {
   double last_lambda = -1.0;
   double last_radius = -1.0;
 
-  bool ensureStructure(const PoseGraph& graph) {
+  bool ensureStructure(const PoseGraph& graph, const OptimizerOptions& o) {
     if (built && built_version == graph.structureVersion()) return false;
     gauge = automaticGauge(graph);
     const int before = system.cholesky().symbolicAnalyses();
-    system.build(graph, gauge);
+    system.build(graph, gauge, static_cast<int>(o.ordering), static_cast<int>(o.factorization));
     symbolic_total += system.cholesky().symbolicAnalyses() - before;
     built_version = graph.structureVersion();
     built = true;
@@ -86,7 +86,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   OptimizerSummary sum;
   sum.variables = graph.variables().size();
   sum.factors = graph.factors().size();
-  sum.structure_rebuilt = im.ensureStructure(graph);
+  sum.structure_rebuilt = im.ensureStructure(graph, options_);
   if (im.gauge) sum.gauge = graph.variables()[*im.gauge].id;
 
   detail::BlockSystem& sys = im.system;
@@ -282,6 +282,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   im.last_radius = radius;
   sum.symbolic_analyses = im.symbolic_total;
   sum.numeric_factorizations = im.numeric_total;
+  sum.factor_nonzeros = n > 0 ? sys.cholesky().factorNonzeros() : 0.0;
   sum.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sum;
 }
@@ -289,7 +290,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
 std::vector<Eigen::MatrixXd> Optimizer::marginalCovariances(const PoseGraph& graph,
                                                             std::span<const VariableId> ids) {
   Impl& im = *impl_;
-  im.ensureStructure(graph);
+  im.ensureStructure(graph, options_);
   detail::BlockSystem& sys = im.system;
   const int n = sys.size();
   std::vector<Eigen::MatrixXd> out;

@@ -37,14 +37,18 @@ void SparseCholesky::setPattern(int n, const std::vector<int>& col_ptr, const st
   std::fill_n(static_cast<double*>(a_->x), row_idx.size(), 0.0);
 }
 
-void SparseCholesky::analyze(bool natural_ordering) {
+void SparseCholesky::analyze(bool natural_ordering, int kind) {
   if (l_ != nullptr) cholmod_free_factor(&l_, &common_);
+  common_.supernodal = kind == 1 ? CHOLMOD_SIMPLICIAL : kind == 2 ? CHOLMOD_SUPERNODAL : CHOLMOD_AUTO;
   if (natural_ordering) {
     common_.nmethods = 1;
     common_.method[0].ordering = CHOLMOD_NATURAL;
-    common_.postorder = 1;
+    // No postordering: an identity permutation lets cholmod_factorize use the matrix as stored instead of
+    // transposing a permuted copy at every numeric factorization (the block ordering is already postordered).
+    common_.postorder = 0;
   } else {
     common_.nmethods = 0;
+    common_.postorder = 1;
   }
   l_ = cholmod_analyze(a_, &common_);
   if (l_ == nullptr) throw std::runtime_error("CHOLMOD: symbolic analysis failed");
@@ -93,6 +97,51 @@ void SparseCholesky::multiply(const double* x, double* y) {
 }
 
 double SparseCholesky::factorNonzeros() const { return common_.lnz; }
+
+std::vector<int> fillReducingOrdering(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx,
+                                      int method) {
+  std::vector<int> perm(n);
+  if (n == 0) return perm;
+  cholmod_common c;
+  cholmod_start(&c);
+  c.print = 0;
+  // Upper triangle with diagonal, pattern only.
+  std::vector<int> cp(n + 1, 0), ri;
+  ri.reserve(row_idx.size() / 2 + n);
+  for (int j = 0; j < n; ++j) {
+    for (int k = col_ptr[j]; k < col_ptr[j + 1]; ++k) {
+      if (row_idx[k] < j) ri.push_back(row_idx[k]);
+    }
+    ri.push_back(j);
+    cp[j + 1] = static_cast<int>(ri.size());
+  }
+  cholmod_sparse* a = cholmod_allocate_sparse(n, n, ri.size(), 1, 1, 1, CHOLMOD_PATTERN, &c);
+  std::copy(cp.begin(), cp.end(), static_cast<int*>(a->p));
+  std::copy(ri.begin(), ri.end(), static_cast<int*>(a->i));
+  if (method == 1) {
+    c.nmethods = 1;
+    c.method[0].ordering = CHOLMOD_AMD;
+  } else if (method == 2) {
+    c.nmethods = 1;
+    c.method[0].ordering = CHOLMOD_METIS;
+  } else {
+    c.nmethods = 2;
+    c.method[0].ordering = CHOLMOD_AMD;
+    c.method[1].ordering = CHOLMOD_METIS;
+  }
+  c.postorder = 1;
+  cholmod_factor* l = cholmod_analyze(a, &c);
+  if (l == nullptr) {
+    cholmod_free_sparse(&a, &c);
+    cholmod_finish(&c);
+    throw std::runtime_error("CHOLMOD: ordering failed");
+  }
+  std::copy_n(static_cast<const int*>(l->Perm), n, perm.begin());
+  cholmod_free_factor(&l, &c);
+  cholmod_free_sparse(&a, &c);
+  cholmod_finish(&c);
+  return perm;
+}
 
 Eigen::MatrixXd solveSparseSpd(int n, const std::vector<Eigen::Triplet<double>>& upper, const Eigen::MatrixXd& b) {
   Eigen::SparseMatrix<double, Eigen::ColMajor, int> a(n, n);

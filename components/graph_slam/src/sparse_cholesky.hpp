@@ -29,7 +29,8 @@ class SparseCholesky {
 
   /// Symbolic analysis. natural_ordering: the pattern is already in a fill-reducing order (the optimizer
   /// orders the blocks with AMD itself); otherwise CHOLMOD's default orderings are tried.
-  void analyze(bool natural_ordering);
+  /// kind: 0 auto, 1 simplicial, 2 supernodal.
+  void analyze(bool natural_ordering, int kind = 0);
   bool analyzed() const { return l_ != nullptr; }
   /// Numeric factorization; false if the matrix is not positive definite.
   bool factorize();
@@ -55,6 +56,12 @@ class SparseCholesky {
   int symbolic_analyses_ = 0;
   int numeric_factorizations_ = 0;
 };
+
+/// Fill-reducing ordering of a symmetric pattern (CSC, both triangles or one, diagonal optional):
+/// method 0 = try AMD and METIS nested dissection and keep the one CHOLMOD predicts less fill / fewer flops
+/// for, 1 = AMD only, 2 = METIS only. Returns perm (new position k holds old index perm[k]).
+std::vector<int> fillReducingOrdering(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx,
+                                      int method);
 
 /// Solves the SPD system A X = B given the upper triangle of A as triplets (duplicates summed).
 /// Throws std::runtime_error if A is not positive definite.

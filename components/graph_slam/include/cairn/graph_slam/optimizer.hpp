@@ -20,6 +20,13 @@ namespace cairn::graph_slam {
 
 enum class Algorithm { kLevenbergMarquardt, kGaussNewton, kDogleg };
 
+/// Fill-reducing ordering of the variable blocks: kAuto tries AMD and METIS nested dissection on the block
+/// graph and keeps the one with less predicted fill.
+enum class Ordering { kAuto, kAmd, kNestedDissection };
+
+/// CHOLMOD factorization kind; kAuto lets CHOLMOD choose from the flop count per factor nonzero.
+enum class Factorization { kAuto, kSimplicial, kSupernodal };
+
 /// Parses "lm", "gn", "dogleg"; throws std::invalid_argument.
 Algorithm parseAlgorithm(const std::string& name);
 
@@ -36,6 +43,8 @@ struct OptimizerOptions {
   double initial_lambda = 1e-4;
   /// Dogleg: initial trust-region radius.
   double initial_radius = 1e4;
+  Ordering ordering = Ordering::kAuto;
+  Factorization factorization = Factorization::kAuto;
   /// Threads for linearization / cost evaluation (>= 1).
   int num_threads = 2;
   /// Reuse the last LM damping / dogleg radius when optimizing the same structure again (incremental use).
@@ -57,6 +66,7 @@ struct OptimizerSummary {
   bool structure_rebuilt = false;      ///< this call rebuilt pattern + symbolic analysis
   int symbolic_analyses = 0;           ///< cumulative over the optimizer's life
   int numeric_factorizations = 0;      ///< cumulative over the optimizer's life
+  double factor_nonzeros = 0.0;        ///< nonzeros of the Cholesky factor (fill-in diagnostic)
   std::optional<VariableId> gauge;     ///< variable held fixed automatically (nothing fixed, no priors)
 };
 
