@@ -1,0 +1,101 @@
+// Throughput of the people tracking pipeline at 30 people (issue 6 target: >= 1000 scans/s on one core).
+// Scans are rendered once in the fixture; only detection (segmentation, features, classifier, leg pairing)
+// and tracking are timed.
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <random>
+
+#include "cairn/people_tracking/detector.hpp"
+#include "cairn/people_tracking/scene.hpp"
+#include "cairn/people_tracking/tracker.hpp"
+
+using namespace cairn::people_tracking;
+
+namespace {
+struct Crowd {
+  std::vector<LaserScan> scans;
+  std::shared_ptr<const LegClassifier> model;
+};
+
+const Crowd& crowd() {
+  static const Crowd c = [] {
+    Crowd out;
+    out.model = std::make_shared<const LegClassifier>(LegClassifier::load(defaultModelPath(ClassifierKind::kAdaBoost, "arras14")));
+    std::mt19937_64 rng(30);
+    std::uniform_real_distribution<double> U(-7.5, 7.5), A(-M_PI, M_PI);
+    std::vector<WalkerState> w(30);
+    std::vector<Eigen::Vector2d> vel(30);
+    for (std::size_t i = 0; i < w.size(); ++i) {
+      do w[i].position = {U(rng), U(rng)};
+      while (w[i].position.norm() < 1.0);
+      const double a = A(rng);
+      vel[i] = 1.2 * Eigen::Vector2d(std::cos(a), std::sin(a));
+      w[i].heading = a;
+    }
+    LaserModel laser;
+    laser.beams = 1080;
+    laser.angle_min = -M_PI;
+    laser.angle_increment = 2 * M_PI / 1080;
+    for (int k = 0; k < 100; ++k) {
+      Scene s;
+      s.addBox({0, 0}, 8.5, 8.5, 0.0, ObjectClass::kWall);
+      for (std::size_t i = 0; i < w.size(); ++i) {
+        w[i].position += 0.1 * vel[i];
+        for (int d = 0; d < 2; ++d)
+          if (std::abs(w[i].position[d]) > 7.5) vel[i][d] = -vel[i][d];
+        w[i].heading = std::atan2(vel[i].y(), vel[i].x());
+        advanceGait(w[i], 0.12, 0.1);
+        addWalker(s, w[i], static_cast<int>(i));
+      }
+      out.scans.push_back(renderScan(s, Pose2{}, laser, 0.1 * k, rng).scan);
+    }
+    return out;
+  }();
+  return c;
+}
+
+void runPipeline(benchmark::State& state, Association assoc) {
+  const Crowd& c = crowd();
+  const PersonDetector detector(c.model);
+  TrackerParams p;
+  p.association = assoc;
+  PeopleTracker tracker(p);
+  std::size_t k = 0;
+  double t = 0.0;
+  for (auto _ : state) {
+    const LaserScan& scan = c.scans[k % c.scans.size()];
+    if (k % c.scans.size() == 0) tracker.reset();  // the crowd jumps back to its start
+    const auto dets = detector.detect(scan);
+    tracker.update(t, dets, Pose2{});
+    benchmark::DoNotOptimize(tracker.tracks().data());
+    t += 0.1;
+    ++k;
+  }
+  state.SetItemsProcessed(state.iterations());  // items/s = scans/s
+}
+
+void BM_DetectAndTrack30People_GNN(benchmark::State& state) { runPipeline(state, Association::kGnn); }
+void BM_DetectAndTrack30People_JPDA(benchmark::State& state) { runPipeline(state, Association::kJpda); }
+
+void BM_Detect30People(benchmark::State& state) {
+  const Crowd& c = crowd();
+  const PersonDetector detector(c.model);
+  std::size_t k = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(detector.detect(c.scans[k++ % c.scans.size()]));
+  state.SetItemsProcessed(state.iterations());
+}
+
+void BM_Segment30People(benchmark::State& state) {
+  const Crowd& c = crowd();
+  std::size_t k = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(segmentScan(c.scans[k++ % c.scans.size()]));
+  state.SetItemsProcessed(state.iterations());
+}
+}  // namespace
+
+BENCHMARK(BM_Segment30People);
+BENCHMARK(BM_Detect30People);
+BENCHMARK(BM_DetectAndTrack30People_GNN);
+BENCHMARK(BM_DetectAndTrack30People_JPDA);
+BENCHMARK_MAIN();
