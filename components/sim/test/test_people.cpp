@@ -176,3 +176,33 @@ TEST(PeopleSimulator, CrowdRatesFollowTimeOfDay) {
   EXPECT_GT(noon, 90);
   EXPECT_LT(noon, 150);
 }
+
+TEST(PeopleSimulator, WorldPeopleSectionWithRecordedEthData) {
+  // A world that places the ETH excerpt with an offset (rotation by 90°, shift) and loops it.
+  const std::string yaml = "walls: [[[-50,-50],[50,-50],[50,50],[-50,50],[-50,-50]]]\n"
+                           "people:\n  - {kind: eth_obsmat, file: " +
+                           kPeopleData +
+                           "eth_seq_eth_obsmat_head400.txt, offset: [1, 2, 1.5707963267948966], time_offset: -52,"
+                           " loop: true}\n";
+  const World w = parseWorld(yaml, "/tmp/eth_world.yaml");
+  ASSERT_EQ(w.people.size(), 1u);
+  PeopleSimulator ps(w, GaitConfig{}, Rng(1));
+  // pedestrian 1 starts at frame 780 -> t = 52 s -> sim t = 0 after the time offset; data (8.457, 3.588)
+  // rotated by +90°: (-3.588, 8.457) + (1, 2)
+  ps.update(0.0);
+  ASSERT_FALSE(ps.people().empty());
+  const PersonState& p = ps.people().front();
+  EXPECT_EQ(p.id, 1);
+  EXPECT_NEAR(p.position.x, 1 - 3.5880664, 1e-6);
+  EXPECT_NEAR(p.position.y, 2 + 8.4568443, 1e-6);
+  // walking direction rotated too: the recorded v is mostly +x -> now mostly +y
+  EXPECT_NEAR(p.heading, std::numbers::pi / 2, 0.3);
+  // loop: the whole excerpt repeats, so people are present again one period later
+  std::size_t max_people = 0;
+  for (double t = 0.0; t < 200.0; t += 0.5) {
+    ps.update(t);
+    max_people = std::max(max_people, ps.people().size());
+  }
+  EXPECT_GE(max_people, 3u);
+  EXPECT_THROW(parseWorld("walls: [[[0,0],[1,0]]]\npeople: [{kind: csv, file: nothere.csv}]\n", "/tmp/x.yaml"), InputError);
+}

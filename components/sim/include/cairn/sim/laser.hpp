@@ -34,6 +34,7 @@ struct LaserConfig {
   void validate() const;
 };
 
+/// One instance per thread: scan() reuses an internal buffer.
 class LaserSimulator {
  public:
   /// Keeps a reference to `walls`: it must outlive the simulator.

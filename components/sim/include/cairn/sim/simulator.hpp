@@ -38,6 +38,9 @@ struct SimOutput {
 class Simulator {
  public:
   Simulator(World world, SimConfig config);
+  // Subsystems keep references into the simulator (grid, world): not copyable or movable.
+  Simulator(const Simulator&) = delete;
+  Simulator& operator=(const Simulator&) = delete;
 
   /// Velocity command (geometry_msgs/Twist on cmd_vel). Ignored while a route is active.
   void setCommand(Twist2 cmd);
