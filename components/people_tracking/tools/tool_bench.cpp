@@ -34,6 +34,11 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--model") p.model = value();
     else if (a == "--association") p.tracker.association = associationFromString(value());
     else if (a == "--dump") p.dump_dir = value();
+    else if (a == "--process-noise") p.tracker.process_noise = number(value());
+    else if (a == "--delete-timeout") p.tracker.delete_timeout = number(value());
+    else if (a == "--max-position-sigma") p.tracker.max_position_sigma = number(value());
+    else if (a == "--confirm-hits") p.tracker.confirm_hits = static_cast<int>(number(value()));
+    else if (a == "--pair-distance") p.detector.max_leg_pair_distance = number(value());
     else throw InputError("unknown bench option '" + a + "'");
   }
   if (p.trajectories.empty()) throw InputError("bench needs --trajectories FILE");
