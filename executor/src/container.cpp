@@ -190,6 +190,12 @@ std::optional<std::string> ComponentManager::unload(uint64_t id) {
   return std::nullopt;
 }
 
+std::shared_ptr<void> ComponentManager::get(uint64_t id) const {
+  std::lock_guard l(mu_);
+  auto it = loaded_.find(id);
+  return it == loaded_.end() ? nullptr : it->second.object;
+}
+
 std::vector<std::pair<uint64_t, std::string>> ComponentManager::list() const {
   std::lock_guard l(mu_);
   std::vector<std::pair<uint64_t, std::string>> out;

@@ -19,6 +19,8 @@
 namespace cairn {
 
 struct LoadRequest {
+  LoadRequest() = default;
+  LoadRequest(std::string cls, std::string name) : class_name(std::move(cls)), node_name(std::move(name)) {}
   std::string class_name;
   std::string node_name;  ///< empty: derived from the class name (Talker -> talker)
   std::string node_namespace = "/";
@@ -51,6 +53,8 @@ class ComponentManager {
   LoadResult load(const LoadRequest& req);
   std::optional<std::string> unload(uint64_t id);
   std::vector<std::pair<uint64_t, std::string>> list() const;
+  /// The component object (for tests and in-process tools); null if no such id.
+  std::shared_ptr<void> get(uint64_t id) const;
   const std::string& name() const { return name_; }
 
  private:

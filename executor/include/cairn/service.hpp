@@ -9,6 +9,7 @@
 #define CAIRN_SERVICE_HPP
 
 #include <chrono>
+#include <deque>
 #include <functional>
 #include <future>
 #include <map>
@@ -87,11 +88,54 @@ class Service : public ServiceBase {
       MessageInfo info;
       if (!reader_ || !reader_->take(&req, info)) return;
       const auto header = req.request_header;
+      const std::pair<uint64_t, int64_t> key{header.client_guid, header.sequence_number};
+      {
+        std::lock_guard l(recent_->mu);
+        auto it = recent_->replies.find(key);
+        if (it != recent_->replies.end()) {
+          // a re-sent request: answer again if done, else the answer is on its way
+          if (it->second) write_reply(writer_, *it->second, reply_match_timeout_, logger_, name_);
+          continue;
+        }
+        recent_->replies[key] = std::nullopt;
+        recent_->order.push_back(key);
+        if (recent_->order.size() > 256) {
+          recent_->replies.erase(recent_->order.front());
+          recent_->order.pop_front();
+        }
+      }
       std::weak_ptr<DdsWriter> weak_writer = writer_;
-      auto reply = [weak_writer, header, timeout = reply_match_timeout_, logger = logger_, name = name_](Resp resp) {
+      std::weak_ptr<Recent> weak_recent = recent_;
+      auto reply = [weak_writer, weak_recent, key, header, timeout = reply_match_timeout_, logger = logger_,
+                    name = name_](Resp resp) {
         auto w = weak_writer.lock();
         if (!w) return;
         resp.request_header = header;
+        if (auto r = weak_recent.lock()) {
+          std::lock_guard l(r->mu);
+          if (r->replies.count(key)) r->replies[key] = resp;
+        }
+        write_reply(w, resp, timeout, logger, name);
+      };
+      try {
+        cb_(req, reply);
+      } catch (const std::exception& e) {
+        CAIRN_ERROR(logger_, "service " << name_ << " callback threw: " << e.what());
+      }
+    }
+  }
+
+ private:
+  struct Recent {
+    std::mutex mu;
+    std::map<std::pair<uint64_t, int64_t>, std::optional<Resp>> replies;
+    std::deque<std::pair<uint64_t, int64_t>> order;
+  };
+
+  static void write_reply(const std::shared_ptr<DdsWriter>& w, const Resp& resp, std::chrono::milliseconds timeout,
+                          const Logger& logger, const std::string& name) {
+    const auto& header = resp.request_header;
+    {
         const auto deadline = std::chrono::steady_clock::now() + timeout;
         while (!detail::writer_matches_client(w->entity(), header.client_guid)) {
           if (std::chrono::steady_clock::now() > deadline) {
@@ -105,16 +149,10 @@ class Service : public ServiceBase {
         } catch (const std::exception& e) {
           CAIRN_ERROR(logger, "service " << name << ": cannot send reply: " << e.what());
         }
-      };
-      try {
-        cb_(req, reply);
-      } catch (const std::exception& e) {
-        CAIRN_ERROR(logger_, "service " << name_ << " callback threw: " << e.what());
-      }
     }
   }
 
- private:
+  std::shared_ptr<Recent> recent_ = std::make_shared<Recent>();
   Executor* exec_;
   DeferredCallback cb_;
   Logger logger_;
@@ -168,18 +206,26 @@ class Client {
   }
 
   /// Waits for the service (at most `timeout`), sends, and waits for the reply within what is left of
-  /// `timeout`. nullopt on timeout.
-  std::optional<Resp> call(Req req, std::chrono::nanoseconds timeout) {
+  /// `timeout`, re-sending the same request every `resend_interval`. nullopt on timeout.
+  std::optional<Resp> call(Req req, std::chrono::nanoseconds timeout,
+                           std::chrono::nanoseconds resend_interval = std::chrono::seconds(1)) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     if (!wait_for_service(timeout)) return std::nullopt;
-    auto f = async_send(std::move(req));
-    const int64_t seq = seq_;
-    if (f.wait_until(deadline) != std::future_status::ready) {
+    auto f = async_send(req);
+    {
       std::lock_guard l(mu_);
-      pending_.erase(seq);
-      return std::nullopt;
+      req.request_header.client_guid = client_id_;
+      req.request_header.sequence_number = seq_;
     }
-    return f.get();
+    for (;;) {
+      const auto next = std::min(deadline, std::chrono::steady_clock::now() + resend_interval);
+      if (f.wait_until(next) == std::future_status::ready) return f.get();
+      if (std::chrono::steady_clock::now() >= deadline) break;
+      writer_->write(&req, 0);  // same client id and sequence number: the server answers it once
+    }
+    std::lock_guard l(mu_);
+    pending_.erase(req.request_header.sequence_number);
+    return std::nullopt;
   }
 
  private:

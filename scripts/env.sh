@@ -1,0 +1,5 @@
+# Source me: runs cairn on loopback only (no other network is touched) on a private DDS domain.
+export CYCLONEDDS_URI="${CYCLONEDDS_URI:-<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery><Peers><Peer address=\"127.0.0.1\"/></Peers><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>60</MaxAutoParticipantIndex></Discovery></Domain></CycloneDDS>}"
+export CAIRN_DOMAIN_ID="${CAIRN_DOMAIN_ID:-$(( (RANDOM % 200) + 20 ))}"
+_cairn_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+export PATH="$_cairn_root/build/bin:$PATH"

@@ -1,0 +1,145 @@
+// End to end through processes: `cairn launch` starting containers, the CLI against them, the DDS path
+// between two containers and the supervision of an isolated component that crashes.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <thread>
+
+#include "support/subprocess.hpp"
+
+using cairn::testing::count;
+using cairn::testing::run;
+using cairn::testing::slurp;
+using namespace std::chrono_literals;
+
+namespace {
+const std::string kCairn = CAIRN_EXE;
+const std::string kSpecs = std::string(CAIRN_SOURCE_ROOT);
+
+std::string tmp_log(const std::string& name) { return "/tmp/cairn_test_" + std::to_string(getpid()) + "_" + name + ".log"; }
+
+int stop(pid_t pid) {
+  kill(pid, SIGTERM);
+  int st = 0;
+  waitpid(pid, &st, 0);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+}
+
+bool wait_for_text(const std::string& log, const std::string& text, int n, std::chrono::seconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (count(slurp(log), text) >= n) return true;
+    std::this_thread::sleep_for(50ms);
+  }
+  return false;
+}
+}  // namespace
+
+TEST(Cli, CommandsAgainstARunningContainer) {
+  const std::string log = tmp_log("cli");
+  const pid_t launch = cairn::testing::start(kCairn + " launch " + kSpecs + "/launch_specs/talker_listener.yaml", log);
+  ASSERT_TRUE(wait_for_text(log, "I heard", 2, 30s)) << slurp(log);
+
+  auto r = run(kCairn + " topic list");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("/chatter std_msgs/msg/String\n"), std::string::npos) << r.output;
+
+  r = run(kCairn + " topic echo /chatter --once");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("data: \"Hello World: "), std::string::npos) << r.output;
+  EXPECT_EQ(count(r.output, "---"), 1) << r.output;
+
+  r = run(kCairn + " topic info /chatter");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("Publisher count: 1\n  node: /talker"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("Subscription count: 1\n  node: /listener"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("qos: reliable, volatile, keep_last(10)"), std::string::npos) << r.output;
+
+  r = run(kCairn + " topic hz /chatter --duration 2.5");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("average rate: "), std::string::npos) << r.output;
+
+  r = run(kCairn + " node list");
+  EXPECT_EQ(r.exit_code, 0);
+  for (const char* n : {"/demo_container\n", "/talker\n", "/listener\n"}) EXPECT_NE(r.output.find(n), std::string::npos) << r.output;
+
+  r = run(kCairn + " param get /talker rate_hz");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.output, "10.0\n");
+  r = run(kCairn + " param set /talker text Hi");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = run(kCairn + " param set /talker rate_hz -3");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("outside"), std::string::npos) << r.output;
+  r = run(kCairn + " param dump /talker");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("    text: \"Hi\"\n"), std::string::npos) << r.output;
+
+  r = run(kCairn + " component load /demo_container cairn_demo::Listener --name extra -r chatter:=/elsewhere");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("as '/extra'"), std::string::npos) << r.output;
+  r = run(kCairn + " component list /demo_container");
+  EXPECT_NE(r.output.find("3  /extra"), std::string::npos) << r.output;
+  r = run(kCairn + " component unload /demo_container 3");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = run(kCairn + " component load /demo_container cairn_demo::Nope");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("unknown component class 'cairn_demo::Nope'"), std::string::npos) << r.output;
+  r = run(kCairn + " component list");
+  EXPECT_NE(r.output.find("/demo_container\n  1  /talker\n  2  /listener\n"), std::string::npos) << r.output;
+
+  // bad input to the CLI
+  r = run(kCairn + " topic echo /no_such_topic --wait 0.5");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(count(r.output, "\n"), 1) << "one line: " << r.output;
+  EXPECT_NE(r.output.find("no publisher of /no_such_topic"), std::string::npos);
+  r = run(kCairn + " param get /nobody x --timeout 0.5");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("node /nobody not found"), std::string::npos) << r.output;
+  r = run(kCairn + " topic frob");
+  EXPECT_EQ(r.exit_code, 2);
+  r = run(kCairn + " no-such-verb");
+  EXPECT_EQ(r.exit_code, 2);
+
+  EXPECT_EQ(stop(launch), 0) << "SIGTERM must stop the launch cleanly";
+  EXPECT_NE(slurp(log).find("[launch]: stopping"), std::string::npos);
+}
+
+TEST(Cli, TwoContainersTalkOverDds) {
+  const std::string log = tmp_log("two");
+  const pid_t launch = cairn::testing::start(kCairn + " launch " + kSpecs + "/test/data/launch/two_containers.yaml", log);
+  EXPECT_TRUE(wait_for_text(log, "(dds)", 5, 30s)) << slurp(log);
+  EXPECT_EQ(count(slurp(log), "(intra-process)"), 0);
+  EXPECT_EQ(stop(launch), 0);
+}
+
+TEST(Cli, CrashedIsolatedComponentIsRespawned) {
+  const std::string log = tmp_log("crash");
+  const pid_t launch = cairn::testing::start(kCairn + " launch " + kSpecs + "/test/data/launch/crash_respawn.yaml", log);
+  EXPECT_TRUE(wait_for_text(log, "loaded cairn_test::Crashes as /crashes into main__crashes", 2, 40s)) << slurp(log);
+  const std::string out = slurp(log);
+  EXPECT_NE(out.find("container main__crashes killed by signal 11 (SIGSEGV); respawning (restart 1)"), std::string::npos)
+      << out;
+  // the non-isolated talker was never affected
+  EXPECT_EQ(count(out, "loaded cairn_demo::Talker as /talker into main"), 1) << out;
+  EXPECT_EQ(stop(launch), 0);
+}
+
+TEST(Cli, InvalidSpecIsRejectedBeforeAnythingStarts) {
+  const std::string spec = "/tmp/cairn_test_bad_" + std::to_string(getpid()) + ".yaml";
+  {
+    std::ofstream f(spec);
+    f << "containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n        params: {rate_hz: x}\n";
+  }
+  auto r = run(kCairn + " launch " + spec);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, "cairn: " + spec + ":5: params: /talker: parameter 'rate_hz' expects double, got string (\"x\")\n");
+  r = run(kCairn + " launch /nonexistent.yaml");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, "cairn: /nonexistent.yaml:0: cannot read the file\n");
+  r = run(kCairn + " launch " + kSpecs + "/launch_specs/demo.yaml --check");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}

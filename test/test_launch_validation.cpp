@@ -1,0 +1,135 @@
+// The whole launch spec is validated before anything starts; each error names file:line and the key.
+#include <gtest/gtest.h>
+
+#include "cairn/launch.hpp"
+
+namespace {
+std::string error_of(const std::string& yaml) {
+  cairn::ComponentLoader loader;
+  try {
+    auto spec = cairn::parse_launch_spec_text(yaml, "spec.yaml");
+    cairn::validate_launch_spec(spec, loader);
+  } catch (const cairn::LaunchError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(LaunchSpec, AValidSpecPasses) {
+  EXPECT_EQ(error_of(R"(containers:
+  - name: c
+    threads: 2
+    components:
+      - class: cairn_demo::Talker
+        params: {rate_hz: 5, text: hi}
+      - class: cairn_demo::Listener
+        namespace: /robot
+        remap: {chatter: /chatter}
+        isolated: true
+processes:
+  - name: p
+    cmd: [echo, hi]
+)"),
+            "");
+}
+
+TEST(LaunchSpec, ParsesEverything) {
+  auto spec = cairn::parse_launch_spec_text(R"(domain_id: 7
+load_timeout: 3
+containers:
+  - name: c
+    components:
+      - class: cairn_demo::Talker
+        name: t
+        params: {rate_hz: 5.5}
+        qos: {chatter: {reliability: best_effort, depth: 3}}
+)",
+                                            "x.yaml");
+  ASSERT_EQ(spec.domain_id, 7);
+  EXPECT_EQ(spec.load_timeout_s, 3.0);
+  ASSERT_EQ(spec.containers.at(0).components.size(), 1u);
+  const auto& c = spec.containers[0].components[0];
+  EXPECT_EQ(c.fqn(), "/t");
+  EXPECT_EQ(std::get<double>(c.params.at("rate_hz")), 5.5);
+  EXPECT_EQ(c.qos.at("chatter").depth, 3);
+  EXPECT_EQ(c.line, 6);
+}
+
+TEST(LaunchSpec, YamlSyntaxErrorNamesTheLine) {
+  EXPECT_EQ(error_of("containers:\n  - name: [unclosed\n").substr(0, 12), "spec.yaml:3:");
+}
+
+TEST(LaunchSpec, UnknownKey) {
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    component: []\n"),
+            "spec.yaml:3: container: unknown key 'component' (allowed: name, threads, components)");
+}
+
+TEST(LaunchSpec, UnknownComponentClass) {
+  const auto e = error_of("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talkr\n");
+  EXPECT_EQ(e.rfind("spec.yaml:4: component.class: unknown component class 'cairn_demo::Talkr' (known: ", 0), 0u) << e;
+}
+
+TEST(LaunchSpec, ParameterOfTheWrongType) {
+  const auto e = error_of(
+      "containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n        params:\n"
+      "          rate_hz: fast\n");
+  EXPECT_EQ(e, "spec.yaml:6: params: /talker: parameter 'rate_hz' expects double, got string (\"fast\")");
+}
+
+TEST(LaunchSpec, ParameterOutOfRange) {
+  const auto e = error_of(
+      "containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n        params: {rate_hz: -1}\n");
+  EXPECT_NE(e.find("spec.yaml:5: params: /talker: parameter 'rate_hz' = -1 is outside"), std::string::npos) << e;
+}
+
+TEST(LaunchSpec, UnknownParameter) {
+  const auto e = error_of(
+      "containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n        params: {rate: 3}\n");
+  EXPECT_NE(e.find("spec.yaml:5: params.rate: cairn_demo::Talker (/talker) has no such parameter (declared: "),
+            std::string::npos)
+      << e;
+}
+
+TEST(LaunchSpec, DuplicateNames) {
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
+                     "      - class: cairn_demo::Talker\n"),
+            "spec.yaml:5: component: duplicate node name '/talker'");
+  EXPECT_EQ(error_of("containers:\n  - name: c\n  - name: c\n"), "spec.yaml:3: container.name: duplicate name 'c'");
+}
+
+TEST(LaunchSpec, RemappingThatJoinsTwoMessageTypes) {
+  const auto e = error_of(
+      "containers:\n  - name: c\n    components:\n      - class: cairn_demo::Listener\n"
+      "      - class: cairn_test::ImagePublisher\n        remap: {chatter: /chatter}\n");
+  EXPECT_NE(e.find("spec.yaml:6: topic /chatter: /image_publisher uses sensor_msgs/msg/Image but /listener uses "
+                   "std_msgs/msg/String"),
+            std::string::npos)
+      << e;
+}
+
+TEST(LaunchSpec, QosThatNeverMatches) {
+  const auto e = error_of(
+      "containers:\n  - name: c\n    components:\n      - class: cairn_test::BestEffortTalker\n"
+      "      - class: cairn_demo::Listener\n");
+  EXPECT_NE(e.find("spec.yaml:5: topic /chatter: /listener never hears /best_effort_talker: subscription requests "
+                   "reliable delivery"),
+            std::string::npos)
+      << e;
+}
+
+TEST(LaunchSpec, BadValuesOfKnownKeys) {
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    threads: many\n"),
+            "spec.yaml:3: container.threads: expected a number, got 'many'");
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
+                     "        qos: {chatter: {reliability: sometimes}}\n"),
+            "spec.yaml:5: qos.chatter: qos reliability expects reliable or best_effort, got 'sometimes'");
+  EXPECT_EQ(error_of("processes:\n  - name: p\n"), "spec.yaml:2: process.cmd: expected a non-empty list");
+  EXPECT_EQ(error_of("[1, 2]\n"), "spec.yaml:1: a launch spec is a map with 'containers' and/or 'processes'");
+  EXPECT_EQ(error_of("containers:\n  - name: 9lives\n"), "spec.yaml:2: container.name: '9lives' is not a valid node name");
+}
+
+TEST(LaunchSpec, ComponentThatThrowsInItsConstructor) {
+  const auto e = error_of("containers:\n  - name: c\n    components:\n      - class: cairn_test::Throws\n");
+  EXPECT_EQ(e, "spec.yaml:4: cairn_test::Throws (/throws) cannot be constructed: deliberate failure");
+}
