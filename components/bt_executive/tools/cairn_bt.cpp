@@ -3,6 +3,8 @@
 //   cairn-bt replay <trace.log>             print a recorded trace in the --trace format
 //   cairn-bt watch <trace.log> [--follow]   live tree view of a trace file being written (tmux-friendly)
 //   cairn-bt model                          <TreeNodesModel> of the built-in nodes
+//   cairn-bt psbt-eval [--starts N] [--seed S] [--n-pl N] [--hotspots K] [--xml FILE]
+//                                           model-based comparison of Stüde §5.4.4 on a synthetic 50 m x 25 m map
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -12,6 +14,7 @@
 #include <thread>
 
 #include "cairn/bt_executive/factory.hpp"
+#include "cairn/bt_executive/psbt.hpp"
 #include "cairn/bt_executive/trace.hpp"
 #include "cairn/bt_executive/xml_loader.hpp"
 
@@ -25,7 +28,8 @@ int usage() {
                "[--no-wait]\n"
                "       cairn bt replay <trace.log>\n"
                "       cairn bt watch <trace.log> [--follow] [--interval-ms N]\n"
-               "       cairn bt model\n");
+               "       cairn bt model\n"
+               "       cairn bt psbt-eval [--starts N] [--seed S] [--n-pl N] [--hotspots K] [--xml FILE]\n");
   return 2;
 }
 
@@ -207,6 +211,83 @@ int cmdWatch(int argc, char** argv) {
   }
 }
 
+/// Stüde §5.4.4 model-based evaluation: random starts on a 50 m x 25 m, 1 m grid with synthetic hotspots,
+/// r_D = 2 m, p'_s = 0.9, Δt = 1 s, l_fail = 100 m, v = 0.5 m/s, n_pl = 6, t_max = 200 s.
+int cmdPsbtEval(int argc, char** argv) {
+  long starts = 500, seed = 1, n_pl = 6, hotspots = 8;
+  std::string xml_out;
+  for (int i = 0; i < argc; ++i) {
+    std::string a = argv[i];
+    long* target = a == "--starts" ? &starts : a == "--seed" ? &seed : a == "--n-pl" ? &n_pl
+                   : a == "--hotspots" ? &hotspots : nullptr;
+    if (target && i + 1 < argc && parseInt(argv[i + 1], *target) && *target >= 0) {
+      ++i;
+    } else if (a == "--xml" && i + 1 < argc) {
+      xml_out = argv[++i];
+    } else {
+      return usage();
+    }
+  }
+  using namespace cairn::bt::psbt;
+  Params p;
+  p.n_pl = static_cast<int>(n_pl);
+  const GridModel m = syntheticHotspots(50, 25, 1.0, static_cast<int>(hotspots), static_cast<std::uint64_t>(seed));
+  std::vector<double> times;
+  for (int k = 0; k <= 10; ++k) times.push_back(20.0 * k);
+  const std::vector<std::string> methods = {"PSBT", "GM", "GC", "RND", "W", "PP"};
+  std::vector<std::vector<double>> sum(methods.size(), std::vector<double>(times.size(), 0.0));
+  std::vector<double> mu_inv(methods.size(), 0.0);
+  std::vector<int> mu_n(methods.size(), 0);
+  double plan_total = 0, plan_max = 0;
+  std::size_t candidates = 0;
+  std::mt19937_64 start_rng(static_cast<std::uint64_t>(seed) * 7919 + 1);
+  std::uniform_int_distribution<int> ux(0, m.width() - 1), uy(0, m.height() - 1);
+  for (long s = 0; s < starts; ++s) {
+    const Eigen::Vector2d start = m.cellCenter(ux(start_rng), uy(start_rng));
+    std::mt19937_64 rng(static_cast<std::uint64_t>(seed) * 1000003 + static_cast<std::uint64_t>(s));
+    const auto t0 = std::chrono::steady_clock::now();
+    const Synthesis syn = synthesize(m, start, p, rng);
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    plan_total += dt;
+    plan_max = std::max(plan_max, dt);
+    candidates += syn.candidates;
+    if (s == 0 && !xml_out.empty()) {
+      std::ofstream os(xml_out);
+      os << toXml(m, start, syn.best, p);
+    }
+    std::vector<Plan> plans{syn.best};
+    for (auto b : {Baseline::GM, Baseline::GC, Baseline::RND, Baseline::W, Baseline::PP})
+      plans.push_back(baseline(b, m, start, p, rng));
+    for (std::size_t k = 0; k < plans.size(); ++k) {
+      cairn::bt::sbt::Analysis a(plans[k].tree);
+      auto pr = a.probabilities(times);
+      for (std::size_t j = 0; j < times.size(); ++j) sum[k][j] += pr[j].first;
+      if (a.successRate() > 0) {
+        mu_inv[k] += 1.0 / a.successRate();
+        ++mu_n[k];
+      }
+    }
+  }
+  std::printf("psbt-eval: %ld starts, 50 m x 25 m grid (1 m), %ld hotspots, seed %ld, n_pl %ld, r_D 2 m, p's 0.9, "
+              "l_fail 100 m, v 0.5 m/s, t_max 200 s\n",
+              starts, hotspots, seed, n_pl);
+  std::printf("mean p_s,T(t)\n%-6s", "t [s]");
+  for (std::size_t j = 1; j < times.size(); ++j) std::printf(" %6.0f", times[j]);
+  std::printf("  mean 1/mu_T [s]\n");
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    std::printf("%-6s", methods[k].c_str());
+    for (std::size_t j = 1; j < times.size(); ++j) std::printf(" %6.3f", sum[k][j] / double(std::max(1L, starts)));
+    std::printf("  %8.1f\n", mu_n[k] ? mu_inv[k] / mu_n[k] : 0.0);
+  }
+  const std::size_t j140 = 7;
+  const double psbt140 = sum[0][j140] / double(std::max(1L, starts)), gm140 = sum[1][j140] / double(std::max(1L, starts));
+  std::printf("PSBT - GM at 140 s: %+.1f %% (points; thesis: +5.7 %%), relative %+.1f %%\n", 100 * (psbt140 - gm140),
+              gm140 > 0 ? 100 * (psbt140 / gm140 - 1) : 0.0);
+  std::printf("planning time per PSBT: mean %.3f s, max %.3f s, %.0f candidate trees each (thesis: 4.8 s, i7-7700T)\n",
+              plan_total / double(std::max(1L, starts)), plan_max, double(candidates) / double(std::max(1L, starts)));
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -215,6 +296,7 @@ int main(int argc, char** argv) {
   if (verb == "run") return cmdRun(argc - 2, argv + 2);
   if (verb == "replay") return cmdReplay(argc - 2, argv + 2);
   if (verb == "watch") return cmdWatch(argc - 2, argv + 2);
+  if (verb == "psbt-eval") return cmdPsbtEval(argc - 2, argv + 2);
   if (verb == "model") {
     NodeFactory f;
     std::fputs(writeTreeNodesModel(f, true).c_str(), stdout);
