@@ -225,7 +225,8 @@ LatentGp::LatentGp(std::unique_ptr<Kernel> k, Eigen::MatrixXd z, double init_sqr
   L = init_sqrt_scale * Eigen::MatrixXd(llt.matrixL());
 }
 
-LatentGp::LatentGp(const LatentGp& o) : kernel(o.kernel ? o.kernel->clone() : nullptr), Z(o.Z), mu(o.mu), L(o.L) {}
+LatentGp::LatentGp(const LatentGp& o)
+    : kernel(o.kernel ? o.kernel->clone() : nullptr), Z(o.Z), mu(o.mu), L(o.L), precision(o.precision) {}
 
 LatentGp& LatentGp::operator=(const LatentGp& o) {
   if (this != &o) {
@@ -233,6 +234,7 @@ LatentGp& LatentGp::operator=(const LatentGp& o) {
     Z = o.Z;
     mu = o.mu;
     L = o.L;
+    precision = o.precision;
   }
   return *this;
 }
@@ -258,23 +260,16 @@ SvgpModel& SvgpModel::operator=(const SvgpModel& o) {
 namespace {
 
 struct LatentCache {
-  Eigen::LLT<Eigen::MatrixXd> LK;
-  Eigen::MatrixXd Kinv, Knu, A, AL;
+  Eigen::MatrixXd Knu, A, AL;
   Eigen::VectorXd kdiag;
 };
 
-void computeMoments(const LatentGp& lat, double jitter, const Eigen::MatrixXd& X, LatentCache& c,
-                    LatentMoments& q, bool keep_kinv) {
-  const Eigen::Index m = lat.Z.rows();
-  Eigen::MatrixXd Kuu = lat.kernel->K(lat.Z, lat.Z);
-  Kuu.diagonal().array() += jitter;
-  c.LK.compute(Kuu);
-  if (c.LK.info() != Eigen::Success) throw std::runtime_error("SVGP: K_uu is not positive definite");
-  if (keep_kinv) c.Kinv = c.LK.solve(Eigen::MatrixXd::Identity(m, m));
+// q(f) marginals on a batch given K_uu⁻¹ (eqs. 4.13-4.14): m = A μ, v = k_nn - diag(A K_un) + diag(A S Aᵀ).
+void computeMoments(const LatentGp& lat, const Eigen::MatrixXd& Kinv, const Eigen::MatrixXd& X, LatentCache& c,
+                    LatentMoments& q) {
   c.Knu = lat.kernel->K(X, lat.Z);
   c.kdiag = lat.kernel->Kdiag(X);
-  // A = K_nu K_uu⁻¹ (eq. 4.13: m = A μ; eq. 4.14: v = k_nn - diag(A K_un) + diag(A S Aᵀ)).
-  c.A = c.LK.solve(c.Knu.transpose()).transpose();
+  c.A.noalias() = c.Knu * Kinv;  // A = K_nu K_uu⁻¹ (GEMM; faster than two triangular solves)
   c.AL.noalias() = c.A * lat.L.triangularView<Eigen::Lower>();
   q.m.noalias() = c.A * lat.mu;
   q.v = c.kdiag - (c.A.array() * c.Knu.array()).rowwise().sum().matrix() +
@@ -282,14 +277,40 @@ void computeMoments(const LatentGp& lat, double jitter, const Eigen::MatrixXd& X
   q.v = q.v.cwiseMax(1e-12);
 }
 
+Eigen::MatrixXd precisionOf(const LatentGp& lat) {
+  if (lat.precision.rows() == lat.L.rows()) return lat.precision;
+  const Eigen::Index m = lat.L.rows();
+  const Eigen::MatrixXd Linv = lat.L.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(m, m));
+  return Linv.transpose() * Linv;
+}
+
 }  // namespace
+
+const SvgpModel::KuuCache& SvgpModel::kuu(int k) const {
+  if (kuu_cache_.size() != latents_.size()) {
+    kuu_cache_.clear();
+    kuu_cache_.resize(latents_.size());
+  }
+  KuuCache& c = kuu_cache_[static_cast<std::size_t>(k)];
+  const LatentGp& lat = latents_[static_cast<std::size_t>(k)];
+  Eigen::VectorXd key(lat.kernel->numParams() + 1);
+  key << lat.kernel->params(), static_cast<double>(lat.Z.rows());
+  if (c.params.size() == key.size() && c.params == key && c.Kinv.rows() == lat.Z.rows()) return c;
+  Eigen::MatrixXd Kuu = lat.kernel->K(lat.Z, lat.Z);
+  Kuu.diagonal().array() += jitter_;
+  c.llt.compute(Kuu);
+  if (c.llt.info() != Eigen::Success) throw std::runtime_error("SVGP: K_uu is not positive definite");
+  c.Kinv = c.llt.solve(Eigen::MatrixXd::Identity(lat.Z.rows(), lat.Z.rows()));
+  c.params = key;
+  return c;
+}
 
 ElboEvaluation SvgpModel::evaluate(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, double scale,
                                    bool hyper_grad) const {
   const int nl = static_cast<int>(latents_.size());
   std::vector<LatentCache> cache(static_cast<std::size_t>(nl));
   std::vector<LatentMoments> q(static_cast<std::size_t>(nl));
-  for (int k = 0; k < nl; ++k) computeMoments(latents_[k], jitter_, X, cache[k], q[k], true);
+  for (int k = 0; k < nl; ++k) computeMoments(latents_[k], kuu(k).Kinv, X, cache[k], q[k]);
   std::vector<LatentMoments> dq;
   ElboEvaluation ev;
   ev.ell = lik_->variationalExpectations(y, q, &dq);
@@ -303,16 +324,19 @@ ElboEvaluation SvgpModel::evaluate(const Eigen::MatrixXd& X, const Eigen::Vector
     const Eigen::Index m = lat.Z.rows();
     pl.b.noalias() = c.A.transpose() * dq[k].m;
     pl.Q.noalias() = c.A.transpose() * (dq[k].v.asDiagonal() * c.A);
-    const Eigen::VectorXd beta = c.Kinv * lat.mu;
-    const Eigen::MatrixXd S = lat.L.triangularView<Eigen::Lower>() * lat.L.transpose();
-    const Eigen::MatrixXd T = c.Kinv * S;  // K⁻¹ S
-    // KL(q(u) || p(u)) = ½[tr(K⁻¹S) + μᵀK⁻¹μ - m + log|K| - log|S|] (eq. 4.12).
-    double logdetK = 2.0 * Eigen::MatrixXd(c.LK.matrixLLT()).diagonal().array().log().sum();
-    double logdetS = 2.0 * lat.L.diagonal().array().abs().log().sum();
-    ev.kl += 0.5 * (T.trace() + lat.mu.dot(beta) - static_cast<double>(m) + logdetK - logdetS);
+    const KuuCache& kc = kuu(k);
+    const Eigen::MatrixXd& Kinv = kc.Kinv;
+    const Eigen::VectorXd beta = Kinv * lat.mu;
+    // KL(q(u) || p(u)) = ½[tr(K⁻¹S) + μᵀK⁻¹μ - m + log|K| - log|S|] (eq. 4.12); tr(K⁻¹S) = ‖L_K⁻¹ L‖²_F.
+    const Eigen::MatrixXd LKL = kc.llt.matrixL().solve(lat.L.triangularView<Eigen::Lower>().toDenseMatrix());
+    const double logdetK = 2.0 * kc.llt.matrixLLT().diagonal().array().log().sum();
+    const double logdetS = 2.0 * lat.L.diagonal().array().abs().log().sum();
+    ev.kl += 0.5 * (LKL.squaredNorm() + lat.mu.dot(beta) - static_cast<double>(m) + logdetK - logdetS);
     pl.grad_mu = scale * pl.b - beta;
-    pl.Kinv = std::move(c.Kinv);
+    pl.Kinv = Kinv;
     if (hyper_grad) {
+      const Eigen::MatrixXd S = lat.L.triangularView<Eigen::Lower>() * lat.L.transpose();
+      const Eigen::MatrixXd T = Kinv * S;  // K⁻¹ S
       // ∂/∂K_nu, ∂/∂diag K_nn, ∂/∂K_uu of scale * E - KL, chained into the kernel parameters.
       Eigen::MatrixXd Gnu = dq[k].m * beta.transpose();
       Eigen::MatrixXd ASK = c.A * T.transpose();  // A S K⁻¹
@@ -321,7 +345,7 @@ ElboEvaluation SvgpModel::evaluate(const Eigen::MatrixXd& X, const Eigen::Vector
       Gnu *= scale;
       const Eigen::MatrixXd TQ = T * pl.Q;
       Eigen::MatrixXd Guu = scale * (pl.Q - TQ - TQ.transpose() - pl.b * beta.transpose());
-      Guu -= 0.5 * (pl.Kinv - T * pl.Kinv - beta * beta.transpose());
+      Guu -= 0.5 * (Kinv - T * Kinv - beta * beta.transpose());
       const int np = lat.kernel->numParams();
       ev.hyper_grad.segment(offset, np) = lat.kernel->gradK(X, lat.Z, Gnu) +
                                           lat.kernel->gradKdiag(X, scale * dq[k].v) +
@@ -339,8 +363,7 @@ double SvgpModel::naturalGradientStep(int k, const ElboEvaluation& ev, double sc
   const Eigen::Index m = lat.Z.rows();
   // Natural parameters θ1 = S⁻¹μ, θ2 = -½S⁻¹; the natural gradient equals the gradient w.r.t. the expectation
   // parameters, giving Λ' = (1-γ)Λ + γ(K⁻¹ - 2 s Q), θ1' = (1-γ)θ1 + γ s (b - 2Qμ) (Salimbeni et al. 2018).
-  const Eigen::MatrixXd Linv = lat.L.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(m, m));
-  const Eigen::MatrixXd Lambda = Linv.transpose() * Linv;
+  const Eigen::MatrixXd Lambda = precisionOf(lat);
   const Eigen::VectorXd theta1 = Lambda * lat.mu;
   const Eigen::MatrixXd target = pl.Kinv - 2.0 * scale * pl.Q;
   const Eigen::VectorXd target1 = scale * (pl.b - 2.0 * pl.Q * lat.mu);
@@ -359,23 +382,33 @@ double SvgpModel::naturalGradientStep(int k, const ElboEvaluation& ev, double sc
     if (!Lnew.allFinite() || !mu_new.allFinite()) continue;
     lat.L = std::move(Lnew);
     lat.mu = mu_new;
+    lat.precision = std::move(Ln);
     return gamma;
   }
   return 0.0;
 }
 
 LatentMoments SvgpModel::latentMoments(int k, const Eigen::MatrixXd& X) const {
+  const LatentGp& lat = latents_[static_cast<std::size_t>(k)];
   LatentMoments out{Eigen::VectorXd(X.rows()), Eigen::VectorXd(X.rows())};
-  const double m = static_cast<double>(latents_[k].Z.rows());
-  ThreadLimit threads(static_cast<double>(X.rows()) * m * m + m * m * m);
+  const Eigen::Index m = lat.Z.rows();
+  ThreadLimit threads(static_cast<double>(X.rows()) * m * m + static_cast<double>(m) * m * m);
+  Eigen::MatrixXd Kuu = lat.kernel->K(lat.Z, lat.Z);
+  Kuu.diagonal().array() += jitter_;
+  Eigen::LLT<Eigen::MatrixXd> llt(Kuu);
+  if (llt.info() != Eigen::Success) throw std::runtime_error("SVGP: K_uu is not positive definite");
+  // m = K_nu β with β = K⁻¹μ; v = k_nn + diag(K_nu B K_un) with B = K⁻¹ (S - K) K⁻¹ (eqs. 4.13-4.16).
+  const Eigen::VectorXd beta = llt.solve(lat.mu);
+  const Eigen::MatrixXd KinvL = llt.solve(lat.L.triangularView<Eigen::Lower>().toDenseMatrix());
+  Eigen::MatrixXd Bm = KinvL * KinvL.transpose() - llt.solve(Eigen::MatrixXd::Identity(m, m));
   const Eigen::Index chunk = 4000;
   for (Eigen::Index s = 0; s < X.rows(); s += chunk) {
     const Eigen::Index len = std::min(chunk, X.rows() - s);
-    LatentCache c;
-    LatentMoments q;
-    computeMoments(latents_[k], jitter_, X.middleRows(s, len), c, q, false);
-    out.m.segment(s, len) = q.m;
-    out.v.segment(s, len) = q.v;
+    const Eigen::MatrixXd Knu = lat.kernel->K(X.middleRows(s, len), lat.Z);
+    out.m.segment(s, len).noalias() = Knu * beta;
+    const Eigen::MatrixXd KB = Knu * Bm;
+    out.v.segment(s, len) =
+        (lat.kernel->Kdiag(X.middleRows(s, len)) + (KB.array() * Knu.array()).rowwise().sum().matrix()).cwiseMax(1e-12);
   }
   return out;
 }
@@ -484,7 +517,8 @@ TrainReport trainSvgp(SvgpModel& model, const Eigen::MatrixXd& X, const Eigen::V
     }
     pos += static_cast<std::size_t>(B);
     const double scale = static_cast<double>(n) / static_cast<double>(B);
-    const bool hyper = cfg.train_hyper && it >= cfg.hyper_warmup && np > 0;
+    const bool hyper = cfg.train_hyper && it >= cfg.hyper_warmup && np > 0 &&
+                       (it - cfg.hyper_warmup) % std::max(1, cfg.hyper_every) == 0;
     ElboEvaluation ev;
     try {
       ev = model.evaluate(Xb, yb, scale, hyper);

@@ -100,6 +100,7 @@ struct LatentGp {
   Eigen::MatrixXd Z;   // m x 3
   Eigen::VectorXd mu;  // m
   Eigen::MatrixXd L;   // m x m lower triangular
+  Eigen::MatrixXd precision;  // cached S⁻¹ (kept by natural-gradient steps; recomputed from L when empty)
 
   LatentGp() = default;
   LatentGp(std::unique_ptr<Kernel> k, Eigen::MatrixXd z, double init_sqrt_scale = 1.0);
@@ -158,9 +159,19 @@ class SvgpModel {
   double jitter() const { return jitter_; }
 
  private:
+  struct KuuCache {
+    Eigen::VectorXd params;
+    Eigen::LLT<Eigen::MatrixXd> llt;
+    Eigen::MatrixXd Kinv;
+  };
+  const KuuCache& kuu(int k) const;
+
   std::vector<LatentGp> latents_;
   std::unique_ptr<Likelihood> lik_;
   double jitter_ = 1e-5;
+  // K_uu factorization per latent, reused while the hyperparameters do not change (evaluate() is therefore not
+  // thread-safe; prediction does not use the cache).
+  mutable std::vector<KuuCache> kuu_cache_;
 };
 
 struct TrainConfig {
@@ -174,6 +185,7 @@ struct TrainConfig {
   int decay_steps = 100;             // linear decay over the first 100 steps (§4.2.5)
   bool train_hyper = true;
   int hyper_warmup = 0;              // natural-gradient-only steps before Adam starts
+  int hyper_every = 1;               // Adam step on every k-th mini-batch (others: natural gradient only)
   double tolerance = 1e-3;           // stop when the epoch-mean ELBO changes relatively less (copa-map: 1e-3)
   int min_epochs = 2;
   std::uint64_t seed = 1;

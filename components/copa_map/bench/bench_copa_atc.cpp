@@ -1,0 +1,126 @@
+// ATC benchmark (Stüde 2024, §4.3.4): CoPA-Map vs ML, FreMEn (Fr-AAM-style) and GP-Hom on the authors' ATC
+// split (50 cm x 60 min), all trained and scored in the same run. Prints one table (NRMSE eq. 4.20, χ² eq. 4.21,
+// NLPD, 95 % coverage, train and predict time).
+//   bench_copa_atc [--data DIR] [--reduced] [--max-seconds S] [--kmeans-inducing] [--no-gphom] [--seed N]
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "cairn/copa_map/baselines.hpp"
+#include "cairn/copa_map/copa_map.hpp"
+#include "cairn/copa_map/io.hpp"
+#include "cairn/copa_map/metrics.hpp"
+
+using namespace cairn::copa_map;
+
+namespace {
+double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+void row(const char* name, const RatePrediction& p, const Eigen::VectorXd& truth, const Eigen::VectorXd* logd,
+         double train_s, double pred_s) {
+  const double nl = logd ? nlpd(*logd) : std::nan("");
+  const double cov = p.std.size() ? coverage95(p.mean, p.std, truth) : std::nan("");
+  std::printf("| %-10s | %7.4f | %12.1f | %8.3f | %6.3f | %9.1f | %9.2f |\n", name, nrmse(p.mean, truth),
+              chiSquareDistance(p.mean, truth), nl, cov, train_s, pred_s);
+  std::fflush(stdout);
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string dir = std::string(CAIRN_SOURCE_ROOT) + "/../shared/data/people/atc_copa_map";
+  bool reduced = false, kmeans_z = false, gphom = true;
+  double max_seconds = 600;
+  int max_iter = 4000;
+  unsigned long seed = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--data" && i + 1 < argc) dir = argv[++i];
+    else if (a == "--reduced") reduced = true;
+    else if (a == "--kmeans-inducing") kmeans_z = true;
+    else if (a == "--no-gphom") gphom = false;
+    else if (a == "--max-seconds" && i + 1 < argc) max_seconds = std::atof(argv[++i]);
+    else if (a == "--max-iterations" && i + 1 < argc) max_iter = std::atoi(argv[++i]);
+    else if (a == "--seed" && i + 1 < argc) seed = std::strtoul(argv[++i], nullptr, 10);
+    else {
+      std::fprintf(stderr, "usage: %s [--data DIR] [--reduced] [--max-seconds S] [--max-iterations N] "
+                           "[--kmeans-inducing] [--no-gphom] [--seed N]\n", argv[0]);
+      return 2;
+    }
+  }
+  try {
+    const GridData train = readGridCsv(dir + "/grid_atc_50cm_60min_train_xy.csv");
+    const GridData test = readGridCsv(dir + "/grid_atc_50cm_60min_test_xy.csv");
+    Eigen::MatrixXd Z = readInducingCsv(dir + "/grid_atc_50cm_60min_train_z.csv");
+    CopaMapConfig cfg;
+    cfg.seed = seed;
+    cfg.period_init.seed = seed;
+    TrainConfig tc;
+    tc.max_seconds = max_seconds;
+    tc.max_iterations = max_iter;
+    tc.seed = seed;
+    if (reduced) {
+      // CI configuration: every 4th authors' inducing point.
+      Eigen::MatrixXd Zr(Z.rows() / 4, 3);
+      for (Eigen::Index i = 0; i < Zr.rows(); ++i) Zr.row(i) = Z.row(4 * i);
+      Z = Zr;
+    }
+    std::printf("ATC split: %ld train, %ld test points; %ld inducing points (%s)%s\n", (long)train.X.rows(),
+                (long)test.X.rows(), kmeans_z ? (long)std::floor(cfg.alpha_ind * train.X.rows()) : (long)Z.rows(),
+                kmeans_z ? "Δ-weighted k-means" : "authors' Z", reduced ? ", reduced configuration" : "");
+    std::printf("| model      |  NRMSE  | χ² distance  |   NLPD   | cov95  | train [s] | pred [s] |\n");
+    std::printf("|------------|---------|--------------|----------|--------|-----------|----------|\n");
+
+    double t0 = now();
+    MlBaseline ml(cfg.cell_size);
+    ml.fit(train.X, train.y);
+    double t1 = now();
+    const RatePrediction pml = ml.predict(test.X);
+    row("ML", pml, test.y, nullptr, t1 - t0, now() - t1);
+
+    t0 = now();
+    FremenBaseline fr;
+    fr.fit(train.X, train.y, Eigen::VectorXd());
+    t1 = now();
+    const RatePrediction pfr = fr.predict(test.X);
+    row("FreMEn", pfr, test.y, nullptr, t1 - t0, now() - t1);
+
+    t0 = now();
+    PeriodInitResult init;
+    CopaMap cm = CopaMap::initialize(train.X, train.y, Eigen::VectorXd(), cfg, kmeans_z ? nullptr : &Z, &init);
+    std::fprintf(stderr, "init: psi=%zu periods", init.periods.size());
+    for (std::size_t i = 0; i < init.periods.size(); ++i)
+      std::fprintf(stderr, " %.2f(var %.2f)", init.periods[i], init.variances[i]);
+    std::fprintf(stderr, "; m_f=%ld m_g=%ld; init %.1f s\n", (long)cm.model().latents()[0].Z.rows(),
+                 (long)cm.model().latents()[1].Z.rows(), now() - t0);
+    tc.progress = [](int it, double elbo, double s) {
+      if (it % 5 == 0) std::fprintf(stderr, "  copa it %d elbo/n %.4f  %.0f s\n", it, elbo, s);
+    };
+    const TrainReport rep = cm.train(train.X, train.y, tc);
+    t1 = now();
+    const RatePrediction pcm = cm.predict(test.X);
+    const Eigen::VectorXd lcm = cm.logPredictiveDensity(test.X, test.y);
+    const double pt = now() - t1;
+    std::fprintf(stderr, "CoPA-Map: %d iterations, %d epochs, %s\n", rep.iterations, rep.epochs, rep.message.c_str());
+    row("CoPA-Map", pcm, test.y, &lcm, t1 - t0, pt);
+
+    if (gphom) {
+      t0 = now();
+      GpHomBaseline gh;
+      gh.initialize(train.X, train.y, Eigen::VectorXd(), cfg, kmeans_z ? nullptr : &Z);
+      tc.progress = [](int it, double elbo, double s) {
+        if (it % 25 == 0) std::fprintf(stderr, "  gphom it %d elbo/n %.4f  %.0f s\n", it, elbo, s);
+      };
+      const TrainReport rg = gh.train(train.X, train.y, tc);
+      t1 = now();
+      const RatePrediction pgh = gh.predict(test.X);
+      const Eigen::VectorXd lgh = gh.logPredictiveDensity(test.X, test.y);
+      std::fprintf(stderr, "GP-Hom: %d iterations, %s\n", rg.iterations, rg.message.c_str());
+      row("GP-Hom", pgh, test.y, &lgh, t1 - t0, now() - t1);
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "cairn: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}
