@@ -21,6 +21,7 @@
 #include <Eigen/Cholesky>
 
 #include "cairn/graph_slam/g2o_io.hpp"
+#include "cairn/graph_slam/gnc.hpp"
 #include "cairn/graph_slam/initialization.hpp"
 #include "cairn/graph_slam/optimizer.hpp"
 
@@ -245,6 +246,14 @@ int outlierExperiment(const std::string& data, int count, const gs::OptimizerOpt
     const double ate = ate2d(g, truth);
     std::printf("%-14s %12.4f %12.4f %14.4f %10.3f %8d\n", k, ate, ate / ate_clean, ate2d(g, clean_xy), sum.time_s,
                 sum.iterations);
+  }
+  {
+    gs::PoseGraph g = corrupted;
+    gs::Optimizer optimizer(opt);
+    const auto sum = gs::optimizeGnc(g, optimizer);
+    const double ate = ate2d(g, truth);
+    std::printf("%-14s %12.4f %12.4f %14.4f %10.3f %8d  (%zu rejected, %d outer)\n", "gnc-gm", ate, ate / ate_clean,
+                ate2d(g, clean_xy), sum.time_s, sum.inner_iterations, sum.rejected, sum.outer_iterations);
   }
   return 0;
 }

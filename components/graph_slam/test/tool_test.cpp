@@ -1,0 +1,71 @@
+// cairn-slam optimize: JSON summary keys, output file, and the bad-input contract (one line
+// "cairn: <file>:<line>: <what>" on stderr, exit code 2).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+
+#include "cairn/graph_slam/g2o_io.hpp"
+
+namespace {
+
+const std::string kData = std::string(CAIRN_SOURCE_ROOT) + "/test/data/pose_graph/";
+
+struct ToolRun {
+  int code;
+  std::string out, err;
+};
+
+std::string slurp(const std::string& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+ToolRun run(const std::string& args) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string out = (dir / "cairn_slam_tool_test.out").string(), err = (dir / "cairn_slam_tool_test.err").string();
+  const int status = std::system((std::string(CAIRN_SLAM_TOOL) + " " + args + " >" + out + " 2>" + err).c_str());
+  return ToolRun{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+}  // namespace
+
+TEST(Tool, OptimizeJsonHasExactlyTheDocumentedKeys) {
+  const std::string out_file = (std::filesystem::temp_directory_path() / "cairn_slam_tool_test.g2o").string();
+  const ToolRun r = run("optimize " + kData + "intel.g2o --json --solver dogleg -o " + out_file);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::regex re(
+      R"(^\{"vertices":943,"edges":1837,"initial_chi2":[0-9.e+-]+,"final_chi2":[0-9.e+-]+,"iterations":[0-9]+,)"
+      R"("time_s":[0-9.e+-]+,"converged":true\}\n$)");
+  EXPECT_TRUE(std::regex_match(r.out, re)) << r.out;
+  const auto g = cairn::graph_slam::readG2o(out_file);
+  EXPECT_EQ(g.variables().size(), 943u);
+  EXPECT_LT(g.chi2(), 600.0);  // optimized values were written
+}
+
+TEST(Tool, BadInputGivesFileLineAndExitCode2) {
+  const std::string bad = (std::filesystem::temp_directory_path() / "cairn_slam_bad.g2o").string();
+  std::ofstream(bad) << "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 -1 0 1\n";
+  ToolRun r = run("optimize " + bad + " --json");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(r.out.empty());
+  EXPECT_EQ(r.err, "cairn: " + bad + ":3: information matrix is not symmetric positive definite (use "
+                   "--fix-information clamp to project it)\n");
+  r = run("optimize " + bad + " --json --fix-information clamp");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("projected 1 information matrices"), std::string::npos) << r.err;
+
+  r = run("optimize /nonexistent.g2o");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: /nonexistent.g2o:0: cannot open file\n");
+  r = run("optimize " + bad + " --solver newton");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("unknown solver 'newton'"), std::string::npos);
+}
