@@ -307,6 +307,36 @@ TEST_F(Engine, PreconditionsSkipFailSucceedAndWhile) {
   EXPECT_TRUE(bb->get<bool>("halted"));
 }
 
+TEST_F(Engine, HaltTreeHaltsEveryRunningNodeAndCancelsTimers) {
+  Tree t = load(R"(<Parallel success_count="2"><TestAsync name="a" ticks="9"/>
+      <Timeout msec="500"><Sleep msec="100"/></Timeout><Delay delay_msec="50"><AlwaysSuccess/></Delay></Parallel>)");
+  TraceRecorder rec(t);
+  EXPECT_EQ(t.tickOnce(), NodeStatus::RUNNING);
+  EXPECT_EQ(sched.pendingTimers(), 3u);  // timeout, sleep, delay
+  t.haltTree();
+  EXPECT_EQ(journal.count("a.halt"), 1u);
+  EXPECT_EQ(sched.pendingTimers(), 0u);
+  for (const auto& n : t.nodes()) EXPECT_EQ(n->status(), NodeStatus::IDLE) << n->path();
+  // children are halted before their parent, in index order
+  const auto& l = rec.lines;
+  auto idx = [&](const std::string& s) { return std::find(l.begin(), l.end(), s) - l.begin(); };
+  EXPECT_LT(idx("1 Parallel/a RUNNING -> IDLE"), idx("1 Parallel/Timeout/Sleep RUNNING -> IDLE"));
+  EXPECT_LT(idx("1 Parallel/Timeout/Sleep RUNNING -> IDLE"), idx("1 Parallel/Timeout RUNNING -> IDLE"));
+  EXPECT_LT(idx("1 Parallel/Delay RUNNING -> IDLE"), idx("1 Parallel RUNNING -> IDLE"));
+}
+
+TEST_F(Engine, SkippedChildrenInControls) {
+  EXPECT_EQ(load(R"(<Fallback><AlwaysSuccess _skipIf="true"/><AlwaysFailure _skipIf="true"/></Fallback>)").tickOnce(),
+            NodeStatus::SKIPPED);
+  EXPECT_EQ(load(R"(<Fallback><AlwaysSuccess _skipIf="true"/><AlwaysFailure/></Fallback>)").tickOnce(),
+            NodeStatus::FAILURE);
+  EXPECT_EQ(load(R"(<Parallel><AlwaysFailure _skipIf="true"/><AlwaysSuccess/></Parallel>)").tickOnce(),
+            NodeStatus::SUCCESS);  // skipped children do not count towards "all"
+  EXPECT_EQ(load(R"(<Inverter><AlwaysFailure _skipIf="true"/></Inverter>)").tickOnce(), NodeStatus::SKIPPED);
+  EXPECT_EQ(load(R"(<ReactiveSequence><AlwaysFailure _skipIf="true"/><AlwaysSuccess/></ReactiveSequence>)").tickOnce(),
+            NodeStatus::SUCCESS);
+}
+
 TEST_F(Engine, ScriptRuntimeErrorFailsTheNodeWithoutThrowing) {
   Tree t = load(R"(<Script code="y := x + 1"/>)");
   std::vector<std::string> errors;
