@@ -228,7 +228,9 @@ void Executor::worker(const std::function<bool()>* pred, std::chrono::steady_clo
       if (done) return;
     }
     if (run_one(lock, nullptr)) continue;
-    const auto wake = std::min(next_timer_wakeup_locked(), deadline);
+    auto wake = std::min(next_timer_wakeup_locked(), deadline);
+    // a predicate may depend on state outside this executor (discovery, other threads): re-check it often
+    if (pred) wake = std::min(wake, std::chrono::steady_clock::now() + std::chrono::milliseconds(5));
     if (std::chrono::steady_clock::now() >= deadline) return;
     ++sleeping_;
     if (wake == std::chrono::steady_clock::time_point::max()) {

@@ -110,7 +110,8 @@ class Executor {
 
   /// Serves work with `threads` threads (the calling one included) until cancel() or shutdown.
   void spin();
-  /// Serves work until `pred()` holds or `timeout` passes; returns pred(). Single calling thread.
+  /// Serves work until `pred()` holds or `timeout` passes; returns pred(). Single calling thread; `pred`
+  /// is re-checked after every callback and at least every 5 ms.
   bool spin_until(const std::function<bool()>& pred, std::chrono::nanoseconds timeout);
   /// Runs ready work and due timers for at most `duration` (single calling thread).
   void spin_for(std::chrono::nanoseconds duration);
