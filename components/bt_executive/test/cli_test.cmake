@@ -56,3 +56,18 @@ run_bt(0 out err watch bt_cli_test.log)
 if(NOT out MATCHES "step 5\nFallback  SUCCESS\n  Sequence  IDLE")
   message(FATAL_ERROR "watch output:\n${out}")
 endif()
+
+# psbt-eval (small run): the table, the PSBT - GM line and a synthesized tree as BT XML.
+run_bt(0 out err psbt-eval --starts 3 --seed 2 --xml bt_cli_psbt.xml)
+if(NOT out MATCHES "PSBT +0\\.[0-9]+" OR NOT out MATCHES "PSBT - GM at 140 s: [-+][0-9.]+ %" OR NOT out MATCHES "1457 candidate trees")
+  message(FATAL_ERROR "psbt-eval output:\n${out}")
+endif()
+file(READ bt_cli_psbt.xml psbt_xml)
+if(NOT psbt_xml MATCHES "<BehaviorTree ID=\"PersonSearch\">" OR NOT psbt_xml MATCHES "<Fallback name=\"search\">")
+  message(FATAL_ERROR "psbt xml:\n${psbt_xml}")
+endif()
+# It names the runtime's person-search actions, which `run` (built-ins only) rejects at load.
+run_bt(2 out err run bt_cli_psbt.xml)
+if(NOT err MATCHES "unknown node '(WaitForPerson|SearchPerson)'")
+  message(FATAL_ERROR "psbt xml run: ${err}")
+endif()
