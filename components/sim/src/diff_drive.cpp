@@ -43,17 +43,25 @@ double approach(double current, double target, double up, double down, double dt
 }  // namespace
 
 void DiffDrive::step(double dt, double now, const SegmentGrid* walls) {
+  if (!walls) {
+    step(dt, now, ClearanceFn{});
+    return;
+  }
+  step(dt, now, [walls](Vec2 p, double max_dist) { return walls->distanceToNearest(p, max_dist); });
+}
+
+void DiffDrive::step(double dt, double now, const ClearanceFn& clearance) {
   Twist2 target = cmd_;
   if (now - cmd_stamp_ > config_.cmd_timeout) target = {};
   vel_.v = approach(vel_.v, target.v, config_.max_acc, config_.max_dec, dt);
   vel_.w = approach(vel_.w, target.w, config_.max_alpha, config_.max_alpha, dt);
   const Pose2 next = integrateArc(pose_, vel_, dt);
   stalled_ = false;
-  if (walls && config_.stall_on_collision && walls->intersectsDisc({next.x, next.y}, config_.footprint_radius)) {
-    // allow moves that increase the clearance (so a robot touching a wall can back off)
-    const double now_clear = walls->distanceToNearest({pose_.x, pose_.y}, config_.footprint_radius);
-    const double next_clear = walls->distanceToNearest({next.x, next.y}, config_.footprint_radius);
-    if (next_clear <= now_clear) {
+  if (clearance && config_.stall_on_collision) {
+    const double r = config_.footprint_radius;
+    const double next_clear = clearance({next.x, next.y}, r);
+    // allow moves that increase the clearance (so a robot touching an obstacle can back off)
+    if (next_clear < r && next_clear <= clearance({pose_.x, pose_.y}, r)) {
       stalled_ = true;
       vel_ = {};
       return;

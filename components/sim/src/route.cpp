@@ -25,9 +25,18 @@ Twist2 RouteFollower::command(const Pose2& pose) {
   const double err = normalizeAngle(std::atan2(d.y, d.x) - pose.theta);
   const double w = std::clamp(config_.k_heading * err, -config_.max_w, config_.max_w);
   if (std::abs(err) > config_.turn_in_place) return {0.0, w};
-  // slow down near the last waypoint and in tight turns
+  // Slow down towards the last waypoint and towards corners (turn > turn_in_place), so that the robot
+  // stops on the waypoint instead of overshooting it: the next leg then starts where it was planned
+  // (matters for doorways that leave only a few centimetres on each side).
   double v = config_.speed * std::cos(err);
-  if (!config_.loop && next_ + 1 == waypoints_.size()) v = std::min(v, 0.8 * norm(d) + 0.05);
+  bool stop_at_next = !config_.loop && next_ + 1 == waypoints_.size();
+  if (!stop_at_next) {
+    const Vec2 after = waypoints_[(next_ + 1) % waypoints_.size()];
+    const Vec2 out = after - waypoints_[next_];
+    if (norm(out) > 1e-9 && std::abs(normalizeAngle(std::atan2(out.y, out.x) - std::atan2(d.y, d.x))) > config_.turn_in_place)
+      stop_at_next = true;
+  }
+  if (stop_at_next) v = std::min(v, 0.8 * norm(d) + 0.05);
   return {std::max(0.0, v), w};
 }
 

@@ -1,6 +1,7 @@
 #include "cairn/sim/simulator.hpp"
 
 #include <cmath>
+#include <algorithm>
 #include <cstring>
 
 namespace cairn::sim {
@@ -44,6 +45,31 @@ void Simulator::dynamicGeometry(std::vector<Segment>& segments, std::vector<Circ
   people_.legCircles(circles);
 }
 
+double Simulator::clearance(Vec2 p, double max_dist) const {
+  // static walls from the grid; doors and furniture at the current time (people do not block the robot)
+  double best = grid_.distanceToNearest(p, max_dist);
+  auto segDist = [](Vec2 q, Vec2 a, Vec2 b) {
+    const Vec2 e = b - a;
+    const double l2 = dot(e, e);
+    const double u = l2 > 0 ? std::clamp(dot(q - a, e) / l2, 0.0, 1.0) : 0.0;
+    return norm(q - (a + u * e));
+  };
+  for (const auto& d : world_.doors) {
+    const Segment s = d.panel(t_);
+    best = std::min(best, segDist(p, s.a, s.b));
+  }
+  collision_segments_.clear();
+  collision_circles_.clear();
+  for (const auto& f : world_.furniture) {
+    const Pose2 fp = f.poseAt(t_);
+    if (norm(Vec2{fp.x, fp.y} - p) > max_dist + 0.5 * std::hypot(f.length, f.width)) continue;
+    f.geometry(t_, collision_segments_, collision_circles_);
+  }
+  for (const auto& s : collision_segments_) best = std::min(best, segDist(p, s.a, s.b));
+  for (const auto& c : collision_circles_) best = std::min(best, std::max(0.0, norm(p - c.center) - c.radius));
+  return best;
+}
+
 void Simulator::stepOnce(SimOutput& out) {
   // Outputs that fall due at the current time come first, so the first scan and odometry are at t = 0.
   const double dt = config_.physics_dt;
@@ -66,7 +92,7 @@ void Simulator::stepOnce(SimOutput& out) {
     next_scan_step_ = std::lround(scan_count_ / (config_.laser.rate * dt));
   }
   if (route_ && !route_->done()) robot_.setCommand(route_->command(robot_.pose()), t_);
-  robot_.step(dt, t_, &grid_);
+  robot_.step(dt, t_, [this](Vec2 p, double max_dist) { return clearance(p, max_dist); });
   odom_.update(robot_.pose());
   ++step_;
   t_ = step_ * dt;  // no accumulated floating-point drift

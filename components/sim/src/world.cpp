@@ -87,7 +87,31 @@ Segment Door::panel(double t) const {
   return {hinge, {hinge.x + c * d.x - s * d.y, hinge.y + s * d.x + c * d.y}, reflectivity};
 }
 
-Pose2 Furniture::poseAt(double t) const { return poses.empty() ? Pose2{} : poses[schedule.indexAt(t)]; }
+Pose2 Furniture::poseAt(double t) const {
+  if (poses.empty()) return {};
+  const std::size_t i = schedule.indexAt(t);
+  if (!interpolate || poses.size() < 2) return poses[i];
+  const double period = schedule.period;
+  double tl = t;
+  if (period > 0) {
+    tl = std::fmod(t, period);
+    if (tl < 0) tl += period;
+  }
+  double t0 = schedule.times[i], t1 = 0.0;
+  std::size_t j = i + 1;
+  if (j < poses.size()) {
+    t1 = schedule.times[j];
+  } else {
+    if (period <= 0) return poses[i];  // after the last entry: stay
+    j = 0;
+    t1 = schedule.times[0] + period;
+  }
+  if (tl < t0) tl += period;  // before the first entry of a period: moving from the last pose
+  const double u = std::clamp((tl - t0) / (t1 - t0), 0.0, 1.0);
+  const Pose2& a = poses[i];
+  const Pose2& b = poses[j];
+  return {a.x + u * (b.x - a.x), a.y + u * (b.y - a.y), normalizeAngle(a.theta + u * normalizeAngle(b.theta - a.theta))};
+}
 
 void Furniture::geometry(double t, std::vector<Segment>& segments, std::vector<Circle>& circles) const {
   const Pose2 p = poseAt(t);
@@ -361,7 +385,7 @@ struct Parser {
       if (!n.IsSequence()) fail(n, "'furniture' must be a list");
       for (std::size_t i = 0; i < n.size(); ++i) {
         const std::string p = idx("furniture", i);
-        checkKeys(n[i], {"name", "size", "legs_only", "leg_radius", "pose", "schedule", "period", "reflectivity"}, p);
+        checkKeys(n[i], {"name", "size", "legs_only", "leg_radius", "pose", "schedule", "period", "interpolate", "reflectivity"}, p);
         Furniture f;
         f.name = n[i]["name"] ? str(n[i]["name"], p + "name") : "furniture_" + std::to_string(i);
         const Vec2 size = point(need(n[i], "size", p), p + "size");
@@ -369,6 +393,7 @@ struct Parser {
         f.length = size.x;
         f.width = size.y;
         if (n[i]["legs_only"]) f.legs_only = boolean(n[i]["legs_only"], p + "legs_only");
+        if (n[i]["interpolate"]) f.interpolate = boolean(n[i]["interpolate"], p + "interpolate");
         f.leg_radius = positive(n[i], "leg_radius", p, f.leg_radius);
         if (2 * f.leg_radius > std::min(f.length, f.width)) fail(n[i]["leg_radius"], "'" + p + "leg_radius' too large");
         f.reflectivity = reflectivity(n[i], p, wall_refl);

@@ -117,3 +117,47 @@ TEST(Simulator, LaserSeesALegPairOfAScriptedWalker) {
   ASSERT_EQ(sim.people().size(), 1u);
   EXPECT_NEAR(sim.people()[0].position.x, 3.0 + 0.05 * 0.01, 1e-9);  // walked 0.05 s at 1 cm/s
 }
+
+TEST(Simulator, EveryRouteOfTheShippedWorldsIsDrivable) {
+  // World sanity: the scripted routes pass doors and aisles without the robot touching walls, doors or
+  // furniture (the robot stalls on contact), at t = 0 when the scheduled doors are open.
+  for (const auto& name : shippedWorlds()) {
+    const World world = loadWorld(resolveWorldPath(name));
+    ASSERT_FALSE(world.routes.empty()) << name;
+    for (const auto& [route_name, waypoints] : world.routes) {
+      SimConfig cfg;
+      cfg.crowd = false;
+      cfg.laser.rate = 1.0;  // scans are not needed here
+      Simulator sim(world, cfg);
+      sim.followRoute(waypoints, RouteConfig{.speed = 1.0});
+      SimOutput out;
+      int stalled_steps = 0;
+      while (sim.routeActive() && sim.time() < 900.0) {
+        sim.advance(0.5, out);
+        out = {};
+        stalled_steps += sim.robot().stalled();
+      }
+      EXPECT_FALSE(sim.routeActive()) << name << "/" << route_name << " stuck at " << sim.groundTruth().x << ", "
+                                      << sim.groundTruth().y;
+      EXPECT_EQ(stalled_steps, 0) << name << "/" << route_name;
+    }
+  }
+}
+
+TEST(Simulator, RobotStallsAtAClosedDoor) {
+  const World w = parseWorld(
+      "walls: [[[-5,-5],[5,-5],[5,5],[-5,5],[-5,-5]], [[1,-5],[1,-0.6]], [[1,0.6],[1,5]]]\n"
+      "doors: [{hinge: [1, -0.6], latch: [1, 0.6], schedule: [{t: 0, open: false}, {t: 10, open: true}]}]\n"
+      "robot: {start: [-2, 0, 0]}\n",
+      "t.yaml");
+  SimConfig cfg;
+  Simulator sim(w, cfg);
+  sim.followRoute({{3, 0}}, RouteConfig{.speed = 0.5});
+  SimOutput out;
+  sim.advance(9.0, out);
+  EXPECT_TRUE(sim.robot().stalled());
+  EXPECT_NEAR(sim.groundTruth().x, 1.0 - cfg.robot.footprint_radius, 0.03);
+  sim.advance(15.0, out);  // the door opens at t = 10 (swings away) and the robot drives through
+  EXPECT_FALSE(sim.routeActive());
+  EXPECT_NEAR(sim.groundTruth().x, 3.0, 0.2);
+}

@@ -113,6 +113,20 @@ TEST(World, FurnitureMovesAndTableShowsOnlyLegs) {
   EXPECT_EQ(dync.size(), 4u + 1u);
 }
 
+TEST(World, InterpolatedFurnitureMovesContinuously) {
+  const World w = parseWorld(
+      "walls: [[[0,0],[10,0]]]\n"
+      "furniture: [{size: [0.4, 0.4], interpolate: true, period: 40,"
+      " schedule: [{t: 0, pose: [2, 1, 0]}, {t: 20, pose: [6, 1, 1]}]}]\n",
+      "t.yaml");
+  const Furniture& f = w.furniture[0];
+  EXPECT_NEAR(f.poseAt(10).x, 4.0, 1e-12);   // half way out
+  EXPECT_NEAR(f.poseAt(10).theta, 0.5, 1e-12);
+  EXPECT_NEAR(f.poseAt(30).x, 4.0, 1e-12);   // half way back
+  EXPECT_NEAR(f.poseAt(35).x, 3.0, 1e-12);
+  EXPECT_NEAR(f.poseAt(75).x, 3.0, 1e-12);   // next period
+}
+
 TEST(WorldErrors, NameFileLineAndKey) {
   EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\nbogus: 1\n"), "w.yaml:3: unknown key 'bogus'");
   EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,x]]\n"), "w.yaml:2: 'walls[0][1][1]' must be a number, got 'x'");

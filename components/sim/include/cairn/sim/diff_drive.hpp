@@ -2,6 +2,8 @@
 // collision with the static walls; odometry with systematic and random error.
 #pragma once
 
+#include <functional>
+
 #include "cairn/sim/raycast.hpp"
 #include "cairn/sim/rng.hpp"
 #include "cairn/sim/types.hpp"
@@ -46,6 +48,10 @@ class DiffDrive {
   /// follows the exact arc. With walls and stall_on_collision, a step that would put the footprint into
   /// a wall is not taken (velocity set to zero, stalled() true).
   void step(double dt, double now, const SegmentGrid* walls = nullptr);
+  /// Distance from a point to the nearest obstacle, capped at the given maximum.
+  using ClearanceFn = std::function<double(Vec2 p, double max_dist)>;
+  /// Same, with any obstacle model (the simulator adds doors and furniture to the walls).
+  void step(double dt, double now, const ClearanceFn& clearance);
   Pose2 pose() const { return pose_; }
   Twist2 velocity() const { return vel_; }
   Twist2 command() const { return cmd_; }

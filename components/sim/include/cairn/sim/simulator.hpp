@@ -60,11 +60,15 @@ class Simulator {
   const SimConfig& config() const { return config_; }
   const SegmentGrid& walls() const { return grid_; }
   const DiffDrive& robot() const { return robot_; }
+  /// Distance from p to the nearest obstacle the robot collides with (walls, doors, furniture).
+  double obstacleClearance(Vec2 p, double max_dist) const { return clearance(p, max_dist); }
   /// Current dynamic geometry (doors, furniture, markers at time(); people's legs).
   void dynamicGeometry(std::vector<Segment>& segments, std::vector<Circle>& circles) const;
 
  private:
   void stepOnce(SimOutput& out);
+  /// Distance from p to the nearest wall, door panel or furniture (capped at max_dist).
+  double clearance(Vec2 p, double max_dist) const;
 
   World world_;
   SimConfig config_;
@@ -83,6 +87,8 @@ class Simulator {
   Twist2 last_odom_twist_;
   std::vector<Segment> dyn_segments_;
   std::vector<Circle> dyn_circles_;
+  mutable std::vector<Segment> collision_segments_;
+  mutable std::vector<Circle> collision_circles_;
 };
 
 /// FNV-1a 64-bit digest of a scan (stamp, geometry fields, ranges and intensities as raw bytes), chained

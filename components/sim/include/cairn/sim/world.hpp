@@ -72,6 +72,9 @@ struct Furniture {
   float reflectivity = 0.3F;
   Schedule schedule;
   std::vector<Pose2> poses;  ///< pose per schedule entry (centre of the rectangle)
+  /// false: jumps to each scheduled pose (semi-static objects); true: moves linearly between consecutive
+  /// poses (continuously moving "dynamic objects" of Dörr §6.2.2).
+  bool interpolate = false;
   Pose2 poseAt(double t) const;
   /// Appends the laser-visible geometry at time t.
   void geometry(double t, std::vector<Segment>& segments, std::vector<Circle>& circles) const;
