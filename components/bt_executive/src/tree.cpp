@@ -5,7 +5,9 @@ namespace cairn::bt {
 Tree::Tree() : context_(std::make_unique<TreeContext>()) {}
 Tree::~Tree() {
   if (root_ && context_) {
-    // Halt running async nodes so that they cancel their timers/requests before the scheduler goes away.
+    // Halt running async nodes so that they cancel their timers/requests before the scheduler goes away. Observers
+    // may already be gone, so the final halt is not reported.
+    context_->clearObservers();
     try {
       root_->haltNode();
     } catch (...) {
@@ -19,7 +21,10 @@ Tree::Tree(Tree&& o) noexcept
 }
 Tree& Tree::operator=(Tree&& o) noexcept {
   if (this != &o) {
-    if (root_ && context_) root_->haltNode();
+    if (root_ && context_) {
+      context_->clearObservers();
+      root_->haltNode();
+    }
     context_ = std::move(o.context_);
     blackboards_ = std::move(o.blackboards_);
     nodes_ = std::move(o.nodes_);

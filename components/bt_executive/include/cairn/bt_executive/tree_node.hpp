@@ -209,6 +209,12 @@ class TreeContext {
 
   std::size_t addObserver(TransitionObserver obs);
   void removeObserver(std::size_t handle);
+  /// Drops every observer and the error handler (the tree is being destroyed).
+  void clearObservers() {
+    observers_.clear();
+    observed_ = false;
+    error_handler_ = nullptr;
+  }
   void setErrorHandler(std::function<void(const RuntimeErrorEvent&)> h) { error_handler_ = std::move(h); }
   bool observed() const { return observed_; }
   void emit(const TreeNode& n, NodeStatus old_s, NodeStatus new_s);
