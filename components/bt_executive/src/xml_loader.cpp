@@ -405,6 +405,13 @@ class Loader {
         child_bb->setAutoRemap(v == "true" || v == "1");
         continue;
       }
+      bool condition = false;
+      for (std::size_t i = 0; i < 4; ++i) {
+        if (an == kPre[i]) spec.pre[i] = parseScript(a->Value(), std::string(an), spec.where, spec.bb);
+        if (an == kPost[i]) spec.post[i] = parseScript(a->Value(), std::string(an), spec.where, spec.bb);
+        condition = condition || an == kPre[i] || an == kPost[i];
+      }
+      if (condition) continue;
       if (!an.empty() && an.front() == '_')
         fail(spec.where, "attribute '" + std::string(an) + "' is not supported on <SubTree>");
       seen.insert(std::string(an));

@@ -133,6 +133,17 @@ TEST_F(Xml, MissingIncludeAndBadLiteralFromFiles) {
   }
 }
 
+TEST_F(Xml, PreconditionsOnSubTree) {
+  const std::string xml = R"(<root BTCPP_format="4" main_tree_to_execute="M">
+    <BehaviorTree ID="M"><Sequence><Script code="go := false"/>
+      <SubTree ID="S" name="s" _skipIf="!go" _onSuccess="ran := true"/></Sequence></BehaviorTree>
+    <BehaviorTree ID="S"><TestSync name="inner"/></BehaviorTree></root>)";
+  Tree t = loadTreeFromText(factory, xml);
+  EXPECT_EQ(t.tickOnce(), NodeStatus::SUCCESS);
+  EXPECT_EQ(journal.count("inner.tick"), 0u);
+  EXPECT_EQ(t.findByPath("Sequence/s")->kind(), NodeKind::SubTree);
+}
+
 TEST_F(Xml, SubTreeLiteralMustFitModelType) {
   const std::string xml = R"(<root BTCPP_format="4" main_tree_to_execute="M">
     <BehaviorTree ID="M"><SubTree ID="S" speed="fast"/></BehaviorTree>
