@@ -250,3 +250,22 @@ TEST(World, ShippedWorldsMatchTheirSpecification) {
   EXPECT_FALSE(wh.markers.empty());
   EXPECT_THROW(resolveWorldPath("no_such_world"), InputError);
 }
+
+TEST(Occupancy, RealMapServerMapOfTheAtcMall) {
+  // The ATC shopping-centre map (Stüde's CoPA-Map data): a real map_server PNG + YAML pair.
+  const std::string map = std::string(CAIRN_SOURCE_ROOT) + "/test/data/people/atc_map.yaml";
+  const World w = parseWorld("map: " + map + "\n", "/tmp/atc.yaml");
+  EXPECT_EQ(w.walls.size(), 25934u);
+  // every wall lies inside the image extent: origin (-60, -40), 2800 x 1200 pixels at 0.05 m
+  EXPECT_GE(w.bounds_min.x, -60.0);
+  EXPECT_GE(w.bounds_min.y, -40.0);
+  EXPECT_LE(w.bounds_max.x, -60.0 + 2800 * 0.05);
+  EXPECT_LE(w.bounds_max.y, -40.0 + 1200 * 0.05);
+  for (const auto& s : w.walls) {
+    // axis-aligned pixel edges on the 5 cm lattice
+    EXPECT_TRUE(s.a.x == s.b.x || s.a.y == s.b.y);
+    const double gx = (s.a.x + 60.0) / 0.05, gy = (s.a.y + 40.0) / 0.05;
+    ASSERT_NEAR(gx, std::round(gx), 1e-6);
+    ASSERT_NEAR(gy, std::round(gy), 1e-6);
+  }
+}
