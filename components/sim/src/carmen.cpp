@@ -1,6 +1,8 @@
 #include "cairn/sim/carmen.hpp"
 
+#if CAIRN_SIM_HAVE_BZIP2
 #include <bzlib.h>
+#endif
 #include <zlib.h>
 
 #include <charconv>
@@ -187,6 +189,7 @@ class GzSource : public CarmenReader::Source {  // zlib also reads plain files t
   gzFile f_;
 };
 
+#if CAIRN_SIM_HAVE_BZIP2
 class Bz2Source : public CarmenReader::Source {
  public:
   explicit Bz2Source(const std::string& path) : path_(path), f_(std::fopen(path.c_str(), "rb")) {
@@ -237,6 +240,7 @@ class Bz2Source : public CarmenReader::Source {
   BZFILE* bz_ = nullptr;
   bool done_ = false;
 };
+#endif
 }  // namespace
 
 CarmenReader::CarmenReader(const std::string& path, CarmenReaderOptions options) : path_(path), options_(std::move(options)) {
@@ -245,8 +249,15 @@ CarmenReader::CarmenReader(const std::string& path, CarmenReaderOptions options)
   unsigned char magic[3] = {0, 0, 0};
   const std::size_t got = std::fread(magic, 1, 3, f);
   std::fclose(f);
-  if (got == 3 && magic[0] == 'B' && magic[1] == 'Z' && magic[2] == 'h') source_ = std::make_unique<Bz2Source>(path);
-  else source_ = std::make_unique<GzSource>(path);
+  if (got == 3 && magic[0] == 'B' && magic[1] == 'Z' && magic[2] == 'h') {
+#if CAIRN_SIM_HAVE_BZIP2
+    source_ = std::make_unique<Bz2Source>(path);
+#else
+    throw InputError(path, 0, "bzip2-compressed log, but cairn_sim was built without bzip2 (install libbz2-dev)");
+#endif
+  } else {
+    source_ = std::make_unique<GzSource>(path);
+  }
 }
 
 CarmenReader::~CarmenReader() = default;

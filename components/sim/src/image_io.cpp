@@ -1,6 +1,9 @@
 // Occupancy images (ROS map_server convention) -> wall segments.
+#if CAIRN_SIM_HAVE_PNG
 #include <png.h>
+#endif
 
+#include <algorithm>
 #include <cctype>
 #include <cstring>
 #include <fstream>
@@ -63,6 +66,7 @@ OccupancyImage readPgm(const std::string& path) {
   return img;
 }
 
+#if CAIRN_SIM_HAVE_PNG
 OccupancyImage readPng(const std::string& path) {
   png_image image;
   std::memset(&image, 0, sizeof image);
@@ -81,6 +85,7 @@ OccupancyImage readPng(const std::string& path) {
   }
   return img;
 }
+#endif
 
 }  // namespace
 
@@ -89,7 +94,14 @@ OccupancyImage readImage(const std::string& path) {
   if (!in) throw InputError(path, 0, "cannot open image");
   unsigned char sig[8] = {};
   in.read(reinterpret_cast<char*>(sig), 8);
-  if (in.gcount() == 8 && png_sig_cmp(sig, 0, 8) == 0) return readPng(path);
+  static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (in.gcount() == 8 && std::equal(sig, sig + 8, kPngSignature)) {
+#if CAIRN_SIM_HAVE_PNG
+    return readPng(path);
+#else
+    throw InputError(path, 0, "PNG image, but cairn_sim was built without libpng (install libpng-dev)");
+#endif
+  }
   return readPgm(path);
 }
 
