@@ -16,7 +16,7 @@ Tree::~Tree() {
 }
 Tree::Tree(Tree&& o) noexcept
     : context_(std::move(o.context_)), blackboards_(std::move(o.blackboards_)), nodes_(std::move(o.nodes_)),
-      root_(o.root_) {
+      root_(o.root_), id_(std::move(o.id_)) {
   o.root_ = nullptr;
 }
 Tree& Tree::operator=(Tree&& o) noexcept {
@@ -29,6 +29,7 @@ Tree& Tree::operator=(Tree&& o) noexcept {
     blackboards_ = std::move(o.blackboards_);
     nodes_ = std::move(o.nodes_);
     root_ = o.root_;
+    id_ = std::move(o.id_);
     o.root_ = nullptr;
   }
   return *this;

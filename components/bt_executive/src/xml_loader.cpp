@@ -148,6 +148,7 @@ class Loader {
     if (it == trees_.end()) throw LoadError(main_file_, 1, "no tree with ID '" + main + "'");
 
     Tree tree;
+    tree.setId(main);
     auto root_bb = opts_.blackboard ? opts_.blackboard : Blackboard::create();
     tree.addBlackboard(root_bb);
     tree_ = &tree;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "cairn/bt_executive/blackboard.hpp"
@@ -23,6 +24,9 @@ class Tree {
   void haltTree();
 
   TreeNode* root() const { return root_; }
+  /// ID of the <BehaviorTree> this tree was instantiated from (set by the loader).
+  const std::string& id() const { return id_; }
+  void setId(std::string id) { id_ = std::move(id); }
   NodeStatus status() const { return root_ ? root_->status() : NodeStatus::IDLE; }
   const std::vector<std::unique_ptr<TreeNode>>& nodes() const { return nodes_; }
   TreeNode* findByPath(std::string_view path) const;
@@ -44,6 +48,7 @@ class Tree {
   std::vector<std::shared_ptr<Blackboard>> blackboards_;
   std::vector<std::unique_ptr<TreeNode>> nodes_;
   TreeNode* root_ = nullptr;
+  std::string id_;
 };
 
 /// Event-driven loop on a ManualScheduler: tick; while RUNNING, tick again at once if a tick was requested, else
