@@ -11,13 +11,18 @@ RouteFollower::RouteFollower(std::vector<Vec2> waypoints, RouteConfig config)
   if (waypoints_.empty()) throw std::invalid_argument("route: no waypoints");
 }
 
-Twist2 RouteFollower::command(const Pose2& pose) {
+Twist2 RouteFollower::command(const Pose2& pose, double now) {
+  if (now < dwell_until_) return {};
   while (!done_) {
     const Vec2 d = waypoints_[next_] - Vec2{pose.x, pose.y};
     if (norm(d) > config_.tolerance) break;
     if (++next_ >= waypoints_.size()) {
       if (config_.loop) next_ = 0;
       else done_ = true;
+    }
+    if (config_.dwell > 0.0 && !done_) {
+      dwell_until_ = now + config_.dwell;
+      return {};
     }
   }
   if (done_) return {};
@@ -29,7 +34,7 @@ Twist2 RouteFollower::command(const Pose2& pose) {
   // stops on the waypoint instead of overshooting it: the next leg then starts where it was planned
   // (matters for doorways that leave only a few centimetres on each side).
   double v = config_.speed * std::cos(err);
-  bool stop_at_next = !config_.loop && next_ + 1 == waypoints_.size();
+  bool stop_at_next = (!config_.loop && next_ + 1 == waypoints_.size()) || config_.dwell > 0.0;
   if (!stop_at_next) {
     const Vec2 after = waypoints_[(next_ + 1) % waypoints_.size()];
     const Vec2 out = after - waypoints_[next_];

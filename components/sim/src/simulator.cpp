@@ -91,7 +91,7 @@ void Simulator::stepOnce(SimOutput& out) {
     ++scan_count_;
     next_scan_step_ = std::lround(scan_count_ / (config_.laser.rate * dt));
   }
-  if (route_ && !route_->done()) robot_.setCommand(route_->command(robot_.pose()), t_);
+  if (route_ && !route_->done()) robot_.setCommand(route_->command(robot_.pose(), t_), t_);
   robot_.step(dt, t_, [this](Vec2 p, double max_dist) { return clearance(p, max_dist); });
   odom_.update(robot_.pose());
   ++step_;

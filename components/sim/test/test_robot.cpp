@@ -138,7 +138,7 @@ TEST(Route, ReachesAllWaypointsInOrder) {
   double t = 0;
   double closest_to_corner = 1e9;
   for (int i = 0; i < 6000 && !route.done(); ++i, t += 0.01) {
-    robot.setCommand(route.command(robot.pose()), t);
+    robot.setCommand(route.command(robot.pose(), t), t);
     robot.step(0.01, t);
     closest_to_corner = std::min(closest_to_corner, std::hypot(robot.pose().x - 2, robot.pose().y - 2));
   }
@@ -170,4 +170,23 @@ TEST(Odometry, RotationNoiseOfATurnInPlace) {
   const double mean = sum / runs, sd = std::sqrt(sum2 / runs - mean * mean);
   EXPECT_NEAR(mean, 0.02 * kPi, 0.003);
   EXPECT_NEAR(sd, 0.01 * std::sqrt(kPi), 0.003);
+}
+
+TEST(Route, DwellsAtEveryWaypoint) {
+  // Stüde §4.3.1: simulated observation routes with stationary intermediate stops.
+  RouteConfig cfg;
+  cfg.dwell = 3.0;
+  RouteFollower route({{1, 0}, {2, 0}}, cfg);
+  DiffDrive robot(DiffDriveConfig{}, {0, 0, 0});
+  double t = 0, stopped_near_first = 0;
+  for (int i = 0; i < 3000 && !route.done(); ++i, t += 0.01) {
+    robot.setCommand(route.command(robot.pose(), t), t);
+    robot.step(0.01, t);
+    if (std::abs(robot.pose().x - 1.0) < 0.2 && robot.velocity().v == 0.0) stopped_near_first += 0.01;
+  }
+  ASSERT_TRUE(route.done());
+  // 3 s of dwell minus the ~0.1 s of braking from the approach speed (the dwell starts on arrival)
+  EXPECT_GT(stopped_near_first, 2.7);
+  EXPECT_LE(stopped_near_first, 3.0 + 1e-9);
+  EXPECT_NEAR(robot.pose().x, 2.0, 0.2);
 }

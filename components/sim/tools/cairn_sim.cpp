@@ -41,7 +41,8 @@ void usage() {
                "  bench [--world W]... [--json] [--seconds S] [--repeat N] [--seed N]\n"
                "                                ray-casting throughput (720-beam scans/s) vs a naive baseline\n"
                "  run --world W --duration S --seed N --out DIR [--route NAME|none] [--no-people] [--no-crowd]\n"
-               "      [--realtime-factor F] [--fov-deg D] [--resolution-deg D] [--laser-rate HZ] [--range-max M]\n"
+               "      [--realtime-factor F] [--route-speed V] [--dwell S] [--fov-deg D] [--resolution-deg D]\n"
+               "      [--laser-rate HZ] [--range-max M]\n"
                "                                headless run; writes robot_path.csv, people.csv, scan_digest.txt\n";
 }
 
@@ -243,6 +244,8 @@ int cmdBench(int argc, char** argv) {
 int cmdRun(int argc, char** argv) {
   std::string world_name, out_dir, route_name;
   double duration = -1, rtf = 0;
+  RouteConfig rc;
+  rc.loop = true;
   SimConfig cfg;
   for (int i = 0; i < argc; ++i) {
     const std::string a = argv[i];
@@ -265,6 +268,8 @@ int cmdRun(int argc, char** argv) {
     else if (a == "--no-people") cfg.people = false;
     else if (a == "--no-crowd") cfg.crowd = false;
     else if (a == "--realtime-factor") rtf = number();
+    else if (a == "--route-speed") rc.speed = number();
+    else if (a == "--dwell") rc.dwell = number();
     else if (a == "--fov-deg") cfg.laser.fov = number() * std::numbers::pi / 180.0;
     else if (a == "--resolution-deg") cfg.laser.resolution = number() * std::numbers::pi / 180.0;
     else if (a == "--laser-rate") cfg.laser.rate = number();
@@ -282,11 +287,7 @@ int cmdRun(int argc, char** argv) {
   }
   std::filesystem::create_directories(out_dir);
   Simulator sim(std::move(world), cfg);
-  if (route) {
-    RouteConfig rc;
-    rc.loop = true;
-    sim.followRoute(*route, rc);
-  }
+  if (route) sim.followRoute(*route, rc);
   std::ofstream path_csv(out_dir + "/robot_path.csv"), people_csv(out_dir + "/people.csv");
   path_csv << "t,x,y,theta,odom_x,odom_y,odom_theta\n";
   people_csv << "t,id,x,y\n";
