@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "cairn/sim/rng.hpp"
 #include "cairn/sim/world.hpp"
 
 using namespace cairn::sim;
@@ -273,4 +274,36 @@ TEST(Occupancy, RealMapServerMapOfTheAtcMall) {
     ASSERT_NEAR(gx, std::round(gx), 1e-6);
     ASSERT_NEAR(gy, std::round(gy), 1e-6);
   }
+}
+
+TEST(WorldErrors, RandomMutationsGiveWorldsOrInputErrorsOnly) {
+  // Seeded mutations of a valid world: every outcome is a world or an InputError with file:line, never
+  // another exception or a crash.
+  Rng rng(17);
+  const std::string base = kWorld;
+  const char alphabet[] = "-0123456789.,:[]{} \nabtxy#";
+  int ok = 0, errors = 0;
+  for (int k = 0; k < 3000; ++k) {
+    std::string s = base;
+    const int edits = 1 + static_cast<int>(rng.uniform() * 3);
+    for (int e = 0; e < edits; ++e) {
+      const std::size_t pos = static_cast<std::size_t>(rng.uniform() * s.size());
+      if (rng.uniform() < 0.5) s[pos] = alphabet[static_cast<std::size_t>(rng.uniform() * (sizeof alphabet - 1))];
+      else s.erase(pos, 1 + static_cast<std::size_t>(rng.uniform() * 6));
+    }
+    try {
+      const World w = parseWorld(s, "m.yaml");
+      ++ok;
+      for (double t : {0.0, 15.0, 1e5}) {  // schedules must be usable whatever was parsed
+        std::vector<Segment> segs;
+        std::vector<Circle> circles;
+        w.dynamicGeometry(t, segs, circles);
+      }
+    } catch (const InputError& e) {
+      ++errors;
+      ASSERT_EQ(std::string(e.what()).rfind("m.yaml:", 0), 0u) << e.what();
+    }
+  }
+  EXPECT_GT(ok, 100);
+  EXPECT_GT(errors, 300);
 }
