@@ -565,6 +565,136 @@ class SubTreeNode : public DecoratorNode {
   }
 };
 
+/// Precondition (BT.CPP v4): evaluates `if` when the child is not running; false -> the `else` status.
+class PreconditionNode : public DecoratorNode {
+ public:
+  explicit PreconditionNode(const NodeConfig& c) : DecoratorNode(c), if_(c.script("if")) {
+    const PortBinding* e = c.binding("else");
+    std::string txt = e && e->has_literal ? e->literal : "FAILURE";
+    auto st = statusFromString(txt);
+    if (!st || (*st != NodeStatus::SUCCESS && *st != NodeStatus::FAILURE && *st != NodeStatus::SKIPPED))
+      throw PortError("Precondition: else must be SUCCESS, FAILURE or SKIPPED, got '" + txt + "'");
+    else_ = *st;
+  }
+  static PortList providedPorts() {
+    return {ScriptPort("if", "condition"),
+            InputPortWithDefault<std::string>("else", "FAILURE", "status when the condition is false")};
+  }
+
+ protected:
+  NodeStatus tick() override {
+    if (child().status() != NodeStatus::RUNNING) {
+      bool b = false;
+      if (!if_->evaluateBool(b, &err_)) {
+        reportError("Precondition: " + err_);
+        return NodeStatus::FAILURE;
+      }
+      if (!b) return else_;
+    }
+    const NodeStatus s = child().executeTick();
+    if (isCompleted(s)) resetChild();
+    return s;
+  }
+
+ private:
+  std::shared_ptr<Script> if_;
+  NodeStatus else_ = NodeStatus::FAILURE;
+  std::string err_;
+};
+
+/// ParallelAll (BT.CPP v4): runs every child to completion; FAILURE if at least max_failures failed.
+class ParallelAllNode : public ControlNode {
+ public:
+  explicit ParallelAllNode(const NodeConfig& c) : ControlNode(c), max_failures_(c.input<int>("max_failures")) {}
+  static PortList providedPorts() { return {InputPortWithDefault<int>("max_failures", "1")}; }
+
+ protected:
+  NodeStatus tick() override {
+    setStatus(NodeStatus::RUNNING);
+    if (done_.size() != children_.size()) done_.assign(children_.size(), 0);
+    std::size_t finished = 0;
+    for (std::size_t i = 0; i < children_.size(); ++i) {
+      if (!done_[i]) {
+        const NodeStatus s = children_[i]->executeTick();
+        if (s == NodeStatus::RUNNING) continue;
+        done_[i] = 1;
+        failures_ += s == NodeStatus::FAILURE;
+        skipped_ += s == NodeStatus::SKIPPED;
+      }
+      ++finished;
+    }
+    if (finished < children_.size()) return NodeStatus::RUNNING;
+    int max_f = 1;
+    max_failures_.get(max_f);
+    const bool all_skipped = skipped_ == children_.size();
+    const NodeStatus r = all_skipped ? NodeStatus::SKIPPED
+                         : failures_ >= static_cast<std::size_t>(std::max(max_f, 1)) ? NodeStatus::FAILURE
+                                                                                       : NodeStatus::SUCCESS;
+    halt();
+    return r;
+  }
+  void halt() override {
+    std::fill(done_.begin(), done_.end(), 0);
+    failures_ = skipped_ = 0;
+    ControlNode::halt();
+  }
+
+ private:
+  Input<int> max_failures_;
+  std::vector<std::uint8_t> done_;
+  std::size_t failures_ = 0, skipped_ = 0;
+};
+
+/// Tracks writes to one blackboard entry through its sequence number (no string lookup, no copy).
+struct UpdateTracker {
+  EntryBase* entry = nullptr;
+  std::uint64_t seen = 0;
+  explicit UpdateTracker(const NodeConfig& c) {
+    const PortBinding* b = c.binding("entry");
+    if (!b || !b->entry) throw PortError("port 'entry' must be a blackboard key, e.g. {key}");
+    entry = b->entry.get();
+    seen = entry->sequence();
+  }
+  bool updated() {
+    const std::uint64_t s = entry->sequence();
+    const bool u = s != seen;
+    seen = s;
+    return u;
+  }
+};
+
+class WasEntryUpdatedNode : public ConditionNode {
+ public:
+  explicit WasEntryUpdatedNode(const NodeConfig& c) : ConditionNode(c), tracker_(c) {}
+  static PortList providedPorts() {
+    PortInfo p = InputPort<Value>("entry", "{key} to watch");
+    p.literal_is_key = true;
+    return {p};
+  }
+
+ protected:
+  NodeStatus onTick() override { return tracker_.updated() ? NodeStatus::SUCCESS : NodeStatus::FAILURE; }
+
+ private:
+  UpdateTracker tracker_;
+};
+
+class SkipUnlessUpdatedNode : public DecoratorNode {
+ public:
+  explicit SkipUnlessUpdatedNode(const NodeConfig& c) : DecoratorNode(c), tracker_(c) {}
+
+ protected:
+  NodeStatus tick() override {
+    if (child().status() != NodeStatus::RUNNING && !tracker_.updated()) return NodeStatus::SKIPPED;
+    const NodeStatus s = child().executeTick();
+    if (isCompleted(s)) resetChild();
+    return s;
+  }
+
+ private:
+  UpdateTracker tracker_;
+};
+
 // =================================================================================================== actions
 class ConstantNode : public SyncActionNode {
  public:
@@ -789,6 +919,18 @@ void registerBuiltinNodes(NodeFactory& f) {
                               [](C c) -> P { return std::make_unique<SubTreeNode>(c); },
                               "instance of another <BehaviorTree>"));
 
+  f.registerManifest(manifest("Precondition", D, PreconditionNode::providedPorts(), 1, 1,
+                              [](C c) -> P { return std::make_unique<PreconditionNode>(c); },
+                              "ticks the child if the script `if` is true, else returns `else`"));
+  f.registerManifest(manifest("ParallelAll", K, ParallelAllNode::providedPorts(), 1, -1,
+                              [](C c) -> P { return std::make_unique<ParallelAllNode>(c); },
+                              "runs all children to completion; FAILURE if >= max_failures failed"));
+  f.registerManifest(manifest("WasEntryUpdated", NodeKind::Condition, WasEntryUpdatedNode::providedPorts(), 0, 0,
+                              [](C c) -> P { return std::make_unique<WasEntryUpdatedNode>(c); },
+                              "SUCCESS if the entry was written since the last tick of this node"));
+  f.registerManifest(manifest("SkipUnlessUpdated", D, WasEntryUpdatedNode::providedPorts(), 1, 1,
+                              [](C c) -> P { return std::make_unique<SkipUnlessUpdatedNode>(c); },
+                              "SKIPPED unless the entry was written since the last run"));
   f.registerManifest(manifest("AlwaysSuccess", A, {}, 0, 0,
                               [](C c) -> P { return std::make_unique<ConstantNode>(c, NodeStatus::SUCCESS); },
                               "returns SUCCESS"));

@@ -337,6 +337,33 @@ TEST_F(Engine, SkippedChildrenInControls) {
             NodeStatus::SUCCESS);
 }
 
+TEST_F(Engine, PreconditionParallelAllAndUpdateTracking) {
+  Tree p = load(R"(<Sequence><Script code="a := 1"/>
+      <Precondition if="a == 2" else="SKIPPED"><TestSync name="x"/></Precondition>
+      <Precondition if="a == 1"><TestSync name="y"/></Precondition></Sequence>)");
+  EXPECT_EQ(p.tickOnce(), NodeStatus::SUCCESS);
+  EXPECT_EQ(journal.count("x.tick"), 0u);
+  EXPECT_EQ(journal.count("y.tick"), 1u);
+
+  Tree pa = load(R"(<ParallelAll max_failures="2"><TestAsync name="a" ticks="1" result="FAILURE"/>
+      <TestAsync name="b" ticks="3"/></ParallelAll>)");
+  EXPECT_EQ(pa.tickOnce(), NodeStatus::RUNNING);
+  EXPECT_EQ(pa.tickOnce(), NodeStatus::RUNNING);
+  EXPECT_EQ(pa.tickOnce(), NodeStatus::RUNNING);
+  EXPECT_EQ(pa.tickOnce(), NodeStatus::SUCCESS);  // one failure < max_failures, after both completed
+  EXPECT_EQ(journal.count("b.halt"), 0u);
+
+  Tree u = load(R"(<Sequence><WasEntryUpdated entry="{goal}"/>
+      <SkipUnlessUpdated entry="{goal}"><TestSync name="plan"/></SkipUnlessUpdated></Sequence>)");
+  auto bb = u.rootBlackboard();
+  EXPECT_EQ(u.tickOnce(), NodeStatus::FAILURE);
+  bb->set<Value>("goal", Value(std::int64_t{3}));
+  EXPECT_EQ(u.tickOnce(), NodeStatus::SUCCESS);
+  EXPECT_EQ(journal.count("plan.tick"), 1u);
+  EXPECT_EQ(u.tickOnce(), NodeStatus::FAILURE);  // not written again
+  EXPECT_EQ(journal.count("plan.tick"), 1u);
+}
+
 TEST_F(Engine, ScriptRuntimeErrorFailsTheNodeWithoutThrowing) {
   Tree t = load(R"(<Script code="y := x + 1"/>)");
   std::vector<std::string> errors;
