@@ -1,14 +1,18 @@
 // cairn-slam-bench: cairn's pose-graph optimizer vs Ceres 2.1 (SPARSE_NORMAL_CHOLESKY on SuiteSparse) on the
-// public g2o benchmarks, same residuals (g2o error convention), same starting values, same tolerances and
-// thread count. Prints per dataset the final chi2 and the median wall time of both, and the time ratio.
-// With --outliers it runs the robustness experiment: M3500 + N random false loop closures.
+// public g2o benchmarks: same residuals and Jacobians (g2o error convention), same manifolds, same starting
+// values, tolerances and thread count. Prints per dataset the final chi2 and the median wall time of both, the
+// time ratio, and cairn's result from chordal initialization. With --outliers N: the robustness experiment
+// (M3500 + N random false loop closures).
 //
 //   cairn-slam-bench [--data DIR] [--runs N] [--threads T] [--max-iters N] [--only NAME] [--outliers N]
+//                    [--solver lm|gn|dogleg] [--ceres-solver lm|dogleg] [--ordering auto|amd|nd]
+//                    [--factorization auto|simplicial|supernodal] [--no-chordal]
 //
 // This is the only translation unit of the package that includes Ceres.
 #include <ceres/ceres.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -19,7 +23,9 @@
 #include <vector>
 
 #include <Eigen/Cholesky>
+#include <Eigen/SVD>
 
+#include "cairn/graph_slam/factors.hpp"
 #include "cairn/graph_slam/g2o_io.hpp"
 #include "cairn/graph_slam/gnc.hpp"
 #include "cairn/graph_slam/initialization.hpp"
@@ -29,52 +35,105 @@ namespace gs = cairn::graph_slam;
 
 namespace {
 
-// ---- Ceres residuals: the same errors as cairn (factors.hpp), whitened by the upper Cholesky factor of Omega.
+// ---- Ceres side. Analytic cost functions built on cairn's error functions, whitened by the upper Cholesky
+// factor of Omega, so Ceres solves exactly the same problem and only the solver machinery differs. (Analytic
+// cost functions also keep this translation unit cheap to compile; an autodiff variant took minutes on 2 cores.)
 
-template <typename T>
-T wrapAngle(const T& a) {
-  const T two_pi(2.0 * M_PI);
-  return a - two_pi * ceres::floor((a + T(M_PI)) / two_pi);
-}
-
-struct Between2Cost {
-  Between2Cost(const gs::Pose2& z, const Eigen::Matrix3d& sqrt_info) : z_(z), sqrt_info_(sqrt_info) {}
-  template <typename T>
-  bool operator()(const T* xi, const T* xj, T* residual) const {
-    const T ci = ceres::cos(xi[2]), si = ceres::sin(xi[2]);
-    const T dx = xj[0] - xi[0], dy = xj[1] - xi[1];
-    const T tx = ci * dx + si * dy, ty = -si * dx + ci * dy;  // Ri^T (tj - ti)
-    const T ux = tx - T(z_.t.x()), uy = ty - T(z_.t.y());
-    const T cz(std::cos(z_.theta)), sz(std::sin(z_.theta));
-    Eigen::Matrix<T, 3, 1> e;
-    e << cz * ux + sz * uy, -sz * ux + cz * uy, wrapAngle(xj[2] - xi[2] - T(z_.theta));
-    Eigen::Map<Eigen::Matrix<T, 3, 1>> r(residual);
-    r = sqrt_info_.cast<T>() * e;
+// SE3 as one 7-vector [t, q(x y z w)] with cairn's retract. Cost functions return the 6 tangent Jacobian
+// columns in the first 6 ambient columns (7th zero) and PlusJacobian = [I6; 0], so the product is exact.
+class Se3Manifold final : public ceres::Manifold {
+ public:
+  int AmbientSize() const override { return 7; }
+  int TangentSize() const override { return 6; }
+  bool Plus(const double* x, const double* delta, double* x_plus_delta) const override {
+    const gs::Pose3 r = gs::retract(toPose(x), gs::Vector6d(Eigen::Map<const gs::Vector6d>(delta)));
+    fromPose(r, x_plus_delta);
     return true;
   }
+  bool PlusJacobian(const double*, double* jacobian) const override {
+    Eigen::Map<Eigen::Matrix<double, 7, 6, Eigen::RowMajor>> j(jacobian);
+    j.setZero();
+    j.topRows<6>().setIdentity();
+    return true;
+  }
+  bool Minus(const double* y, const double* x, double* y_minus_x) const override {
+    const gs::Pose3 px = toPose(x), py = toPose(y);
+    Eigen::Map<gs::Vector6d> d(y_minus_x);
+    d.head<3>() = px.q.conjugate() * (py.t - px.t);
+    d.tail<3>() = gs::logSO3(px.q.conjugate() * py.q);
+    return true;
+  }
+  bool MinusJacobian(const double*, double* jacobian) const override {
+    Eigen::Map<Eigen::Matrix<double, 6, 7, Eigen::RowMajor>> j(jacobian);
+    j.setZero();
+    j.leftCols<6>().setIdentity();
+    return true;
+  }
+  static gs::Pose3 toPose(const double* x) {
+    gs::Pose3 p;
+    p.t = Eigen::Vector3d(x[0], x[1], x[2]);
+    p.q = Eigen::Quaterniond(x[6], x[3], x[4], x[5]);
+    return p;
+  }
+  static void fromPose(const gs::Pose3& p, double* x) {
+    x[0] = p.t.x();
+    x[1] = p.t.y();
+    x[2] = p.t.z();
+    x[3] = p.q.x();
+    x[4] = p.q.y();
+    x[5] = p.q.z();
+    x[6] = p.q.w();
+  }
+};
+
+class Between2Cost final : public ceres::SizedCostFunction<3, 3, 3> {
+ public:
+  Between2Cost(const gs::Pose2& z, const Eigen::Matrix3d& sqrt_info) : z_(z), sqrt_info_(sqrt_info) {}
+  bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
+    const gs::Pose2 xi{Eigen::Vector2d(p[0][0], p[0][1]), p[0][2]};
+    const gs::Pose2 xj{Eigen::Vector2d(p[1][0], p[1][1]), p[1][2]};
+    Eigen::Matrix3d ji, jj;
+    const bool jac = jacobians != nullptr;
+    const Eigen::Vector3d e = gs::errorBetween2(xi, xj, z_, jac ? &ji : nullptr, jac ? &jj : nullptr);
+    Eigen::Map<Eigen::Vector3d> r(residuals);
+    r = sqrt_info_ * e;
+    using RowMajor3 = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
+    if (jac && jacobians[0] != nullptr) {
+      Eigen::Map<RowMajor3> j0(jacobians[0]);
+      j0 = sqrt_info_ * ji;
+    }
+    if (jac && jacobians[1] != nullptr) {
+      Eigen::Map<RowMajor3> j1(jacobians[1]);
+      j1 = sqrt_info_ * jj;
+    }
+    return true;
+  }
+
+ private:
   gs::Pose2 z_;
   Eigen::Matrix3d sqrt_info_;
 };
 
-struct Between3Cost {
+class Between3Cost final : public ceres::SizedCostFunction<6, 7, 7> {
+ public:
   Between3Cost(const gs::Pose3& z, const gs::Matrix6d& sqrt_info) : z_(z), sqrt_info_(sqrt_info) {}
-  template <typename T>
-  bool operator()(const T* ti_p, const T* qi_p, const T* tj_p, const T* qj_p, T* residual) const {
-    Eigen::Map<const Eigen::Matrix<T, 3, 1>> ti(ti_p), tj(tj_p);
-    Eigen::Map<const Eigen::Quaternion<T>> qi(qi_p), qj(qj_p);
-    const Eigen::Quaternion<T> qi_inv = qi.conjugate();
-    const Eigen::Matrix<T, 3, 1> t_ij = qi_inv * (tj - ti);
-    const Eigen::Quaternion<T> qz = z_.q.cast<T>();
-    Eigen::Quaternion<T> qe = qz.conjugate() * (qi_inv * qj);
-    qe.normalize();
-    if (qe.w() < T(0)) qe.coeffs() = -qe.coeffs();
-    Eigen::Matrix<T, 6, 1> e;
-    e.template head<3>() = qz.conjugate() * (t_ij - z_.t.cast<T>());
-    e.template tail<3>() = qe.vec();
-    Eigen::Map<Eigen::Matrix<T, 6, 1>> r(residual);
-    r = sqrt_info_.cast<T>() * e;
+  bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
+    gs::Matrix6d ji, jj;
+    const bool jac = jacobians != nullptr;
+    const gs::Vector6d e = gs::errorBetween3(Se3Manifold::toPose(p[0]), Se3Manifold::toPose(p[1]), z_,
+                                             jac ? &ji : nullptr, jac ? &jj : nullptr);
+    Eigen::Map<gs::Vector6d> r(residuals);
+    r = sqrt_info_ * e;
+    for (int b = 0; b < 2 && jac; ++b) {
+      if (jacobians[b] == nullptr) continue;
+      Eigen::Map<Eigen::Matrix<double, 6, 7, Eigen::RowMajor>> j(jacobians[b]);
+      j.setZero();
+      j.leftCols<6>() = sqrt_info_ * (b == 0 ? ji : jj);
+    }
     return true;
   }
+
+ private:
   gs::Pose3 z_;
   gs::Matrix6d sqrt_info_;
 };
@@ -92,36 +151,29 @@ struct CeresRun {
   bool converged = false;
 };
 
-CeresRun solveWithCeres(gs::PoseGraph graph, const gs::OptimizerOptions& opt, const gs::RobustKernel& kernel) {
-  const auto gauge = gs::automaticGauge(graph);
+CeresRun solveWithCeres(gs::PoseGraph graph, const gs::OptimizerOptions& opt, bool dogleg) {
+  const auto gauge = gs::automaticGauge(graph);  // the same gauge as cairn: the first pose held constant
   const auto& vars = graph.variables();
   std::vector<std::array<double, 3>> p2(vars.size());
-  std::vector<std::array<double, 3>> t3(vars.size());
-  std::vector<std::array<double, 4>> q3(vars.size());
+  std::vector<std::array<double, 7>> p3(vars.size());
   for (std::size_t k = 0; k < vars.size(); ++k) {
     p2[k] = {vars[k].pose2.t.x(), vars[k].pose2.t.y(), vars[k].pose2.theta};
-    t3[k] = {vars[k].pose3.t.x(), vars[k].pose3.t.y(), vars[k].pose3.t.z()};
-    q3[k] = {vars[k].pose3.q.x(), vars[k].pose3.q.y(), vars[k].pose3.q.z(), vars[k].pose3.q.w()};
+    Se3Manifold::fromPose(vars[k].pose3, p3[k].data());
   }
   ceres::Problem::Options popt;
   popt.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(popt);
-  ceres::EigenQuaternionManifold quat_manifold;
-  ceres::LossFunction* loss = nullptr;
-  if (kernel.type == gs::RobustKernel::Type::kHuber) loss = new ceres::HuberLoss(kernel.delta);
-  if (kernel.type == gs::RobustKernel::Type::kCauchy) loss = new ceres::CauchyLoss(kernel.delta);
+  Se3Manifold se3_manifold;
   for (const gs::Factor& f : graph.factors()) {
     const std::size_t i = f.var[0], j = f.var[1];
     if (f.kind == gs::FactorKind::kBetween2) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Between2Cost, 3, 3, 3>(
-                                   new Between2Cost(f.z2, sqrtInfo<3>(f.information))),
-                               loss, p2[i].data(), p2[j].data());
+      problem.AddResidualBlock(new Between2Cost(f.z2, sqrtInfo<3>(f.information)), nullptr, p2[i].data(),
+                               p2[j].data());
     } else if (f.kind == gs::FactorKind::kBetween3) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Between3Cost, 6, 3, 4, 3, 4>(
-                                   new Between3Cost(f.z3, sqrtInfo<6>(f.information))),
-                               loss, t3[i].data(), q3[i].data(), t3[j].data(), q3[j].data());
-      problem.SetManifold(q3[i].data(), &quat_manifold);
-      problem.SetManifold(q3[j].data(), &quat_manifold);
+      problem.AddResidualBlock(new Between3Cost(f.z3, sqrtInfo<6>(f.information)), nullptr, p3[i].data(),
+                               p3[j].data());
+      problem.SetManifold(p3[i].data(), &se3_manifold);
+      problem.SetManifold(p3[j].data(), &se3_manifold);
     } else {
       std::fprintf(stderr, "cairn-slam-bench: only relative-pose factors are benchmarked\n");
       std::exit(2);
@@ -129,16 +181,13 @@ CeresRun solveWithCeres(gs::PoseGraph graph, const gs::OptimizerOptions& opt, co
   }
   if (gauge) {
     const std::size_t g = *gauge;
-    if (vars[g].kind == gs::VariableKind::kPose2) {
-      problem.SetParameterBlockConstant(p2[g].data());
-    } else {
-      problem.SetParameterBlockConstant(t3[g].data());
-      problem.SetParameterBlockConstant(q3[g].data());
-    }
+    problem.SetParameterBlockConstant(vars[g].kind == gs::VariableKind::kPose2 ? p2[g].data() : p3[g].data());
   }
   ceres::Solver::Options so;
   so.minimizer_type = ceres::TRUST_REGION;
-  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  so.trust_region_strategy_type = dogleg ? ceres::DOGLEG : ceres::LEVENBERG_MARQUARDT;
+  so.dogleg_type = ceres::TRADITIONAL_DOGLEG;  // Powell's dogleg, as cairn's
+  so.initial_trust_region_radius = dogleg ? opt.initial_radius : 1.0 / opt.initial_lambda;
   so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   so.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
   so.max_num_iterations = opt.max_iterations;
@@ -150,17 +199,17 @@ CeresRun solveWithCeres(gs::PoseGraph graph, const gs::OptimizerOptions& opt, co
   ceres::Solver::Summary summary;
   const auto t0 = std::chrono::steady_clock::now();
   ceres::Solve(so, &problem, &summary);
-  if (std::getenv("CAIRN_BENCH_CERES_REPORT") != nullptr) std::fprintf(stderr, "%s\n", summary.FullReport().c_str());
   CeresRun run;
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (std::getenv("CAIRN_BENCH_CERES_REPORT") != nullptr) std::fprintf(stderr, "%s\n", summary.FullReport().c_str());
   run.iterations = static_cast<int>(summary.iterations.size()) - 1;
   run.converged = summary.termination_type == ceres::CONVERGENCE;
   // chi2 evaluated by cairn on Ceres's values (identical error definition).
   std::vector<gs::Variable> out = vars;
   for (std::size_t k = 0; k < vars.size(); ++k) {
     out[k].pose2 = gs::Pose2{Eigen::Vector2d(p2[k][0], p2[k][1]), gs::normalizeAngle(p2[k][2])};
-    out[k].pose3.t = Eigen::Vector3d(t3[k][0], t3[k][1], t3[k][2]);
-    out[k].pose3.q = Eigen::Quaterniond(q3[k][3], q3[k][0], q3[k][1], q3[k][2]).normalized();
+    out[k].pose3 = Se3Manifold::toPose(p3[k].data());
+    out[k].pose3.q.normalize();
   }
   graph.setValues(out);
   run.chi2 = graph.chi2();
@@ -266,6 +315,8 @@ int main(int argc, char** argv) {
   int outliers = 0;
   std::string only;
   gs::OptimizerOptions opt;
+  bool ceres_dogleg = false;
+  bool chordal = true;
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
     auto next = [&]() -> std::string {
@@ -275,13 +326,25 @@ int main(int argc, char** argv) {
       }
       return argv[++k];
     };
-    if (a == "--data") data = next();
-    else if (a == "--runs") runs = std::max(1, std::atoi(next().c_str()));
-    else if (a == "--threads") opt.num_threads = std::max(1, std::atoi(next().c_str()));
-    else if (a == "--max-iters") opt.max_iterations = std::atoi(next().c_str());
-    else if (a == "--only") only = next();
-    else if (a == "--outliers") outliers = std::atoi(next().c_str());
-    else if (a == "--ordering") {
+    if (a == "--data") {
+      data = next();
+    } else if (a == "--runs") {
+      runs = std::max(1, std::atoi(next().c_str()));
+    } else if (a == "--threads") {
+      opt.num_threads = std::max(1, std::atoi(next().c_str()));
+    } else if (a == "--max-iters") {
+      opt.max_iterations = std::atoi(next().c_str());
+    } else if (a == "--only") {
+      only = next();
+    } else if (a == "--outliers") {
+      outliers = std::atoi(next().c_str());
+    } else if (a == "--solver") {
+      opt.algorithm = gs::parseAlgorithm(next());
+    } else if (a == "--ceres-solver") {
+      ceres_dogleg = next() == "dogleg";
+    } else if (a == "--no-chordal") {
+      chordal = false;
+    } else if (a == "--ordering") {
       const std::string v = next();
       opt.ordering = v == "amd" ? gs::Ordering::kAmd : v == "nd" ? gs::Ordering::kNestedDissection : gs::Ordering::kAuto;
     } else if (a == "--factorization") {
@@ -289,10 +352,11 @@ int main(int argc, char** argv) {
       opt.factorization = v == "simplicial"   ? gs::Factorization::kSimplicial
                           : v == "supernodal" ? gs::Factorization::kSupernodal
                                               : gs::Factorization::kAuto;
-    }
-    else {
-      std::fprintf(stderr, "usage: cairn-slam-bench [--data DIR] [--runs N] [--threads T] [--max-iters N] [--only NAME] [--outliers N]\n"
-                   "                        [--ordering auto|amd|nd] [--factorization auto|simplicial|supernodal]\n");
+    } else {
+      std::fprintf(stderr,
+                   "usage: cairn-slam-bench [--data DIR] [--runs N] [--threads T] [--max-iters N] [--only NAME]\n"
+                   "         [--outliers N] [--solver lm|gn|dogleg] [--ceres-solver lm|dogleg]\n"
+                   "         [--ordering auto|amd|nd] [--factorization auto|simplicial|supernodal] [--no-chordal]\n");
       return 2;
     }
   }
@@ -311,12 +375,17 @@ int main(int argc, char** argv) {
       {"torus3D", "se-sync/torus3D.g2o"},
       {"cubicle(clamp)", "se-sync/cubicle.g2o", true},
   };
-  std::printf("# cairn LM vs Ceres 2.1 LM (SPARSE_NORMAL_CHOLESKY, SUITE_SPARSE), stored initial values,\n"
-              "# max %d iterations, function tol %g, gradient tol %g, parameter tol %g, %d threads, median of %d runs\n",
-              opt.max_iterations, opt.function_tolerance, opt.gradient_tolerance, opt.parameter_tolerance,
-              opt.num_threads, runs);
-  std::printf("%-16s %8s %8s %16s %16s %10s %5s %10s %5s %7s %s\n", "dataset", "vertices", "edges", "cairn_chi2",
-              "ceres_chi2", "cairn_s", "it", "ceres_s", "it", "ratio", "notes");
+  const char* cairn_alg = opt.algorithm == gs::Algorithm::kDogleg        ? "dogleg"
+                          : opt.algorithm == gs::Algorithm::kGaussNewton ? "GN"
+                                                                         : "LM";
+  std::printf("# cairn %s vs Ceres 2.1 %s (SPARSE_NORMAL_CHOLESKY, SUITE_SPARSE; same analytic residuals), stored\n"
+              "# initial values, max %d iterations, function tol %g, gradient tol %g, parameter tol %g, %d threads,\n"
+              "# median of %d runs (cairn and Ceres interleaved)\n",
+              cairn_alg, ceres_dogleg ? "dogleg" : "LM", opt.max_iterations, opt.function_tolerance,
+              opt.gradient_tolerance, opt.parameter_tolerance, opt.num_threads, runs);
+  std::printf("%-16s %6s %6s %15s %15s %9s %9s %4s %9s %4s %7s %15s %9s %s\n", "dataset", "V", "E", "cairn_chi2",
+              "ceres_chi2", "rel_diff", "cairn_s", "it", "ceres_s", "it", "ratio", "chordal_chi2", "chordal_s",
+              "notes");
   for (const Dataset& d : sets) {
     if (!only.empty() && d.name.find(only) == std::string::npos) continue;
     gs::G2oReadOptions ro;
@@ -329,25 +398,34 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "cairn: %s\n", e.what());
       return 2;
     }
-    std::vector<double> tc, tr;
-    gs::OptimizerSummary cs;
+    std::vector<double> tc, tr, tch;
+    gs::OptimizerSummary cs, chs;
     CeresRun cr;
     for (int r = 0; r < runs; ++r) {
       gs::PoseGraph g = graph;
       gs::Optimizer optimizer(opt);
       cs = optimizer.optimize(g);
       tc.push_back(cs.time_s);
-      cr = solveWithCeres(graph, opt, gs::RobustKernel{});
+      cr = solveWithCeres(graph, opt, ceres_dogleg);
       tr.push_back(cr.seconds);
+      if (chordal) {
+        gs::PoseGraph h = graph;
+        const auto t0 = std::chrono::steady_clock::now();
+        gs::initializeChordal(h);
+        chs = gs::Optimizer(opt).optimize(h);
+        tch.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      }
     }
     const double mc = median(tc), mr = median(tr);
     std::string notes;
     if (rep.clamped_information > 0) notes += std::to_string(rep.clamped_information) + " info clamped; ";
     if (!cs.converged) notes += "cairn not converged; ";
     if (!cr.converged) notes += "ceres not converged; ";
-    std::printf("%-16s %8zu %8zu %16.9g %16.9g %10.4f %5d %10.4f %5d %7.3f %s\n", d.name.c_str(),
-                graph.variables().size(), graph.factors().size(), cs.final_chi2, cr.chi2, mc, cs.iterations, mr,
-                cr.iterations, mc / mr, notes.c_str());
+    if (chordal && !chs.converged) notes += "chordal run not converged; ";
+    std::printf("%-16s %6zu %6zu %15.9g %15.9g %9.1e %9.4f %4d %9.4f %4d %7.3f %15.9g %9.4f %s\n", d.name.c_str(),
+                graph.variables().size(), graph.factors().size(), cs.final_chi2, cr.chi2,
+                (cs.final_chi2 - cr.chi2) / cr.chi2, mc, cs.iterations, mr, cr.iterations, mc / mr,
+                chordal ? chs.final_chi2 : 0.0, chordal ? median(tch) : 0.0, notes.c_str());
     std::fflush(stdout);
   }
   return 0;

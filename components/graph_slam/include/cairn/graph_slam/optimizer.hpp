@@ -31,7 +31,7 @@ enum class Factorization { kAuto, kSimplicial, kSupernodal };
 Algorithm parseAlgorithm(const std::string& name);
 
 struct OptimizerOptions {
-  Algorithm algorithm = Algorithm::kLevenbergMarquardt;
+  Algorithm algorithm = Algorithm::kDogleg;
   int max_iterations = 100;
   /// Stop when an accepted step lowers the objective by less than this fraction.
   double function_tolerance = 1e-10;
