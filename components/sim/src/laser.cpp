@@ -1,5 +1,8 @@
 #include "cairn/sim/laser.hpp"
 
+#include "cairn/sim/diff_drive.hpp"  // integrateArc
+
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -96,6 +99,56 @@ void LaserSimulator::castIdeal(const Pose2& lp, const std::vector<Segment>& dyna
   }
 }
 
+void LaserSimulator::castIdealMoving(const Pose2& robot_pose, Twist2 vel, const std::vector<Segment>& dynamic_segments,
+                                     const std::vector<Circle>& circles, std::vector<RayHit>& hits) const {
+  hits.resize(n_);
+  const double rmax = config_.range_max;
+  const double dt = config_.resolution / (2.0 * std::numbers::pi) / config_.rate;  // time between beams
+  const double T = dt * (n_ - 1);
+  std::vector<Pose2>& origins = origins_;
+  origins.resize(n_);
+  for (int i = 0; i < n_; ++i) origins[i] = compose(integrateArc(robot_pose, vel, i * dt), config_.mount);
+  auto beamDir = [&](int i) {
+    const double c = std::cos(origins[i].theta), s = std::sin(origins[i].theta);
+    return Vec2{c * cos_[i] - s * sin_[i], s * cos_[i] + c * sin_[i]};
+  };
+  for (int i = 0; i < n_; ++i) hits[i] = walls_.cast({origins[i].x, origins[i].y}, beamDir(i), rmax);
+  // Culling as in castIdeal from the first beam's origin, widened by how far the origin moves and turns
+  // during the scan.
+  const Pose2& lp = origins.front();
+  const Vec2 o{lp.x, lp.y};
+  const double shift = std::abs(vel.v) * T + std::abs(vel.w) * T * std::hypot(config_.mount.x, config_.mount.y);
+  const double turn = std::abs(vel.w) * T;
+  auto margin = [&](double dist) { return turn + (dist > shift ? std::asin(shift / dist) : std::numbers::pi); };
+  for (const auto& seg : dynamic_segments) {
+    const Vec2 ra = seg.a - o, rb = seg.b - o;
+    const double e = norm(rb - ra);
+    const double dist = e > 1e-12 ? std::min({norm(ra), norm(rb), std::abs(cross(rb - ra, ra)) / e}) : norm(ra);
+    if (std::min(norm(ra), norm(rb)) > rmax + shift && dist > rmax + shift) continue;
+    const double aa = std::atan2(ra.y, ra.x) - lp.theta, ab = std::atan2(rb.y, rb.x) - lp.theta;
+    double span = normalizeAngle(ab - aa);
+    const double start = span >= 0 ? aa : aa + span;
+    span = std::abs(span);
+    const double m = margin(dist);
+    forBeamsInInterval(start - m, span + 2 * m, [&](int i) {
+      const double t = raySegment({origins[i].x, origins[i].y}, beamDir(i), seg.a, seg.b);
+      if (t >= 0.0 && t < hits[i].range) hits[i] = {t, seg.reflectivity, true};
+    });
+  }
+  for (const auto& circ : circles) {
+    const Vec2 rc = circ.center - o;
+    const double dist = norm(rc);
+    if (dist - circ.radius > rmax + shift) continue;
+    const double half = dist > circ.radius ? std::asin(circ.radius / dist) : std::numbers::pi;
+    const double m = margin(std::max(0.0, dist - circ.radius));
+    const double bearing = std::atan2(rc.y, rc.x) - lp.theta;
+    forBeamsInInterval(bearing - half - m, 2.0 * (half + m), [&](int i) {
+      const double t = rayCircle({origins[i].x, origins[i].y}, beamDir(i), circ.center, circ.radius);
+      if (t >= 0.0 && t < hits[i].range) hits[i] = {t, circ.reflectivity, true};
+    });
+  }
+}
+
 LaserScan LaserSimulator::scan(const Pose2& robot_pose, double stamp, const std::vector<Segment>& dynamic_segments,
                                const std::vector<Circle>& circles, Rng& rng) const {
   LaserScan out;
@@ -104,9 +157,12 @@ LaserScan LaserSimulator::scan(const Pose2& robot_pose, double stamp, const std:
 }
 
 void LaserSimulator::scan(const Pose2& robot_pose, double stamp, const std::vector<Segment>& dynamic_segments,
-                          const std::vector<Circle>& circles, Rng& rng, LaserScan& out) const {
+                          const std::vector<Circle>& circles, Rng& rng, LaserScan& out, Twist2 velocity) const {
   const LaserConfig& cfg = config_;
-  castIdeal(compose(robot_pose, cfg.mount), dynamic_segments, circles, hits_);
+  if (cfg.motion_distortion && (velocity.v != 0.0 || velocity.w != 0.0))
+    castIdealMoving(robot_pose, velocity, dynamic_segments, circles, hits_);
+  else
+    castIdeal(compose(robot_pose, cfg.mount), dynamic_segments, circles, hits_);
   out.stamp = stamp;
   out.frame_id = cfg.frame_id;
   out.angle_min = static_cast<float>(cfg.angleMin());

@@ -87,7 +87,7 @@ void Simulator::stepOnce(SimOutput& out) {
     dyn_circles_.clear();
     dynamicGeometry(dyn_segments_, dyn_circles_);
     out.scans.emplace_back();
-    laser_.scan(robot_.pose(), t_, dyn_segments_, dyn_circles_, laser_rng_, out.scans.back());
+    laser_.scan(robot_.pose(), t_, dyn_segments_, dyn_circles_, laser_rng_, out.scans.back(), robot_.velocity());
     ++scan_count_;
     next_scan_step_ = std::lround(scan_count_ / (config_.laser.rate * dt));
   }

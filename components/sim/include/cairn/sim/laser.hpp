@@ -25,6 +25,9 @@ struct LaserConfig {
   bool binary_intensity = false;         ///< Dörr §4.4: binary reflectivity {0, 1} instead of a value
   double intensity_scale = 1000.0;       ///< intensity = scale * reflectivity (non-binary mode)
   double binary_threshold = 0.5;         ///< reflectivity >= threshold -> 1 (binary mode)
+  /// true: beam i is cast from the pose the moving robot has at stamp + i * time_increment (constant
+  /// velocity over the scan), like a rotating scanner on a moving base; false: all beams from one pose.
+  bool motion_distortion = false;
 
   /// Number of beams: fov/resolution (+1 unless the field of view is a full circle).
   int beams() const;
@@ -46,9 +49,13 @@ class LaserSimulator {
   /// Full scan for the robot at `robot_pose` (world), with noise drawn from rng.
   LaserScan scan(const Pose2& robot_pose, double stamp, const std::vector<Segment>& dynamic_segments,
                  const std::vector<Circle>& circles, Rng& rng) const;
-  /// Same, reusing `out`'s buffers (no allocation once warmed up).
+  /// Same, reusing `out`'s buffers (no allocation once warmed up). `velocity` is the robot's body velocity,
+  /// used when config().motion_distortion is set.
   void scan(const Pose2& robot_pose, double stamp, const std::vector<Segment>& dynamic_segments,
-            const std::vector<Circle>& circles, Rng& rng, LaserScan& out) const;
+            const std::vector<Circle>& circles, Rng& rng, LaserScan& out, Twist2 velocity = {}) const;
+  /// Noise-free returns with motion distortion: beam i from compose(arc(robot_pose, velocity, i dt), mount).
+  void castIdealMoving(const Pose2& robot_pose, Twist2 velocity, const std::vector<Segment>& dynamic_segments,
+                       const std::vector<Circle>& circles, std::vector<RayHit>& hits) const;
 
   const LaserConfig& config() const { return config_; }
 
@@ -61,6 +68,7 @@ class LaserSimulator {
   int n_ = 0;
   std::vector<double> cos_, sin_;  ///< beam directions in the laser frame
   mutable std::vector<RayHit> hits_;
+  mutable std::vector<Pose2> origins_;
 };
 
 }  // namespace cairn::sim
