@@ -16,24 +16,20 @@ constexpr double kLog2Pi = 1.83787706640934548356;
 constexpr double kSqrtPi = 1.77245385090551602730;
 
 // Small problems run on one thread: on a loaded 2-core machine every OpenMP barrier can cost a scheduler time
-// slice, which dwarfs the work of small matrix products.
+// slice, which dwarfs the work of small matrix products. omp_set_num_threads only changes the calling thread's
+// setting, and Eigen's GEMM follows omp_get_max_threads() (cairn never calls Eigen::setNbThreads), so this is
+// safe while another thread predicts or trains.
 class ThreadLimit {
  public:
-  explicit ThreadLimit(double work) : saved_(omp_get_max_threads()), eigen_saved_(Eigen::nbThreads()) {
-    if (work < 2e7) {
-      omp_set_num_threads(1);
-      Eigen::setNbThreads(1);
-    }
+  explicit ThreadLimit(double work) : saved_(omp_get_max_threads()) {
+    if (work < 2e7) omp_set_num_threads(1);
   }
-  ~ThreadLimit() {
-    omp_set_num_threads(saved_);
-    Eigen::setNbThreads(eigen_saved_);
-  }
+  ~ThreadLimit() { omp_set_num_threads(saved_); }
   ThreadLimit(const ThreadLimit&) = delete;
   ThreadLimit& operator=(const ThreadLimit&) = delete;
 
  private:
-  int saved_, eigen_saved_;
+  int saved_;
 };
 
 double maxInducing(const std::vector<LatentGp>& l) {
