@@ -77,6 +77,7 @@ void Executor::push_locked(std::shared_ptr<Executable> e) {
   }
   ring_[(head_ + size_) % ring_.size()] = std::move(e);
   ++size_;
+  ready_count_.store(size_, std::memory_order_release);
 }
 
 std::shared_ptr<Executable> Executor::pop_locked() {
@@ -84,6 +85,7 @@ std::shared_ptr<Executable> Executor::pop_locked() {
   auto e = std::move(ring_[head_]);
   head_ = (head_ + 1) % ring_.size();
   --size_;
+  ready_count_.store(size_, std::memory_order_release);
   return e;
 }
 
@@ -220,6 +222,7 @@ bool Executor::run_one(std::unique_lock<std::mutex>& lock, Time*) {
 
 void Executor::worker(const std::function<bool()>* pred, std::chrono::steady_clock::time_point deadline) {
   std::unique_lock lock(mu_);
+  bool worked = false;
   while (!canceled_.load()) {
     if (pred) {
       lock.unlock();
@@ -227,7 +230,22 @@ void Executor::worker(const std::function<bool()>* pred, std::chrono::steady_clo
       lock.lock();
       if (done) return;
     }
-    if (run_one(lock, nullptr)) continue;
+    if (run_one(lock, nullptr)) {
+      worked = true;
+      continue;
+    }
+    if (worked && opts_.spin.count() > 0) {
+      // poll briefly for the next item before paying for a sleep and a wake-up
+      worked = false;
+      lock.unlock();
+      const auto until = std::min(deadline, std::chrono::steady_clock::now() + opts_.spin);
+      while (ready_count_.load(std::memory_order_acquire) == 0 && std::chrono::steady_clock::now() < until &&
+             !canceled_.load(std::memory_order_relaxed)) {
+        __builtin_ia32_pause();
+      }
+      lock.lock();
+      continue;
+    }
     auto wake = std::min(next_timer_wakeup_locked(), deadline);
     // a predicate may depend on state outside this executor (discovery, other threads): re-check it often
     if (pred) wake = std::min(wake, std::chrono::steady_clock::now() + std::chrono::milliseconds(5));

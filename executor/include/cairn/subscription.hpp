@@ -77,7 +77,11 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
       std::weak_ptr<Subscription<T>> weak = self;
       reader_ = std::make_unique<DdsReader>(*ctx, dds_topic_name(topic_), msgs::type_support<T>(), qos_, opts,
                                             [weak](DdsReader&) {
-                                              if (auto s = weak.lock()) s->exec_->schedule(s);
+                                              // one wake-up drains everything that has arrived, so a burst
+                                              // costs one queue entry, not one per sample
+                                              if (auto s = weak.lock(); s && !s->dds_pending_.exchange(true)) {
+                                                s->exec_->schedule(s);
+                                              }
                                             });
     }
   }
@@ -115,7 +119,8 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
       return;
     }
     if (!reader_) return;
-    // DDS leg: drain what has arrived (the listener may coalesce arrivals into one wake-up)
+    // DDS leg: drain what has arrived; arrivals from now on schedule a new run
+    dds_pending_.store(false);
     for (;;) {
       auto msg = std::make_unique<T>();
       MessageInfo info;
@@ -193,6 +198,7 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
   std::mutex mu_;
   std::deque<Item> queue_;
   uint64_t dropped_ = 0;
+  std::atomic<bool> dds_pending_{false};
 };
 
 }  // namespace cairn

@@ -1,0 +1,442 @@
+// cairn bench ipc — latency and throughput of cairn's message paths, each against a baseline measured in
+// the same run, one JSON object per line:
+//   same_thread   publisher and subscriber on one executor thread (inline delivery), 1 KiB and 1 MiB;
+//                 baseline: handing the unique_ptr to a std::function directly.
+//   cross_thread  publisher on another thread than the subscriber's executor (event queue + wake-up);
+//                 baseline: a bare std::condition_variable hand-off between two threads.
+//   dds_rtt       two processes over DDS, round trip 12 B / 1 KiB / 64 KiB / 1 MiB;
+//                 baseline: ddsperf ping/pong (cyclonedds-tools) with the same sizes, same domain config.
+//   dds_throughput 1 KiB reliable flood to another process; baseline: ddsperf pub/sub.
+// Latencies are one-way: half the round trip for dds_rtt, as ddsperf prints them.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <mutex>
+#include <new>
+#include <sstream>
+#include <thread>
+
+#include "cairn/node.hpp"
+#include "cairn/process.hpp"
+#include "sensor_msgs/msg/Image.hpp"
+
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+using Image = sensor_msgs::msg::Image;
+
+// heap allocations of the calling thread while armed (test/alloc_counter.cpp)
+extern thread_local bool g_count_allocs;
+extern thread_local long g_allocs;
+
+namespace {
+
+struct Stats {
+  double p50 = 0, p99 = 0, max = 0;
+  std::size_t n = 0;
+};
+
+Stats stats(std::vector<double> v) {
+  Stats s;
+  if (v.empty()) return s;
+  std::sort(v.begin(), v.end());
+  s.n = v.size();
+  s.p50 = v[v.size() / 2];
+  s.p99 = v[std::min(v.size() - 1, v.size() * 99 / 100)];
+  s.max = v.back();
+  return s;
+}
+
+double ns_since(Clock::time_point t0) { return std::chrono::duration<double, std::nano>(Clock::now() - t0).count(); }
+
+std::string size_name(std::size_t n) {
+  if (n >= (1u << 20)) return std::to_string(n >> 20) + "MiB";
+  if (n >= 1024) return std::to_string(n >> 10) + "KiB";
+  return std::to_string(n) + "B";
+}
+
+cairn::NodeOptions opts(const std::string& name, cairn::Executor& e) {
+  cairn::NodeOptions o(name, &e);
+  o.start_parameter_services = false;
+  return o;
+}
+
+// ---------------- same thread ----------------
+void same_thread(std::size_t size, int iters) {
+  cairn::Executor exec;
+  cairn::Node node(opts("bench_same", exec));
+  auto pub = node.create_publisher<Image>("bench/same");
+  std::unique_ptr<Image> slot = std::make_unique<Image>();
+  slot->data.resize(size);
+  const Image* original = slot.get();
+  Clock::time_point t0;
+  std::vector<double> lat;
+  lat.reserve(iters + 1000);
+  long copies = 0;
+  auto sub = node.create_subscription<Image>("bench/same", cairn::QoS{}, [&](std::unique_ptr<Image> m) {
+    lat.push_back(ns_since(t0));
+    if (m.get() != original) ++copies;
+    slot = std::move(m);
+  });
+  long allocs = 0;
+  bool done = false;
+  auto timer = node.create_wall_timer(1ms, [&] {
+    if (done) return;
+    for (int i = 0; i < 1000; ++i) {  // warm-up
+      t0 = Clock::now();
+      pub->publish(std::move(slot));
+    }
+    lat.clear();
+    g_allocs = 0;
+    g_count_allocs = true;
+    const auto start = Clock::now();
+    for (int i = 0; i < iters; ++i) {
+      t0 = Clock::now();
+      pub->publish(std::move(slot));
+    }
+    const double total = ns_since(start);
+    g_count_allocs = false;
+    allocs = g_allocs;
+    const auto s = stats(lat);
+    // baseline: a direct std::function call handing over the unique_ptr
+    std::function<void(std::unique_ptr<Image>)> direct = [&](std::unique_ptr<Image> m) {
+      lat.push_back(ns_since(t0));
+      slot = std::move(m);
+    };
+    lat.clear();
+    for (int i = 0; i < iters; ++i) {
+      t0 = Clock::now();
+      direct(std::move(slot));
+    }
+    const auto b = stats(lat);
+    std::printf(
+        "{\"case\":\"same_thread\",\"size\":\"%s\",\"p50_ns\":%.0f,\"p99_ns\":%.0f,\"max_ns\":%.0f,\"msgs_per_s\":%.0f,"
+        "\"copies\":%ld,\"allocs_per_msg\":%.3f,\"baseline\":\"direct std::function call\",\"baseline_p50_ns\":%.0f,"
+        "\"ratio_p50\":%.2f,\"goal\":\"p50<=1000ns, 0 copies, 0 allocations\"}\n",
+        size_name(size).c_str(), s.p50, s.p99, s.max, iters / (total * 1e-9), copies, double(allocs) / iters, b.p50,
+        b.p50 > 0 ? s.p50 / b.p50 : 0.0);
+    std::fflush(stdout);
+    done = true;
+  });
+  exec.spin_until([&] { return done; }, 60s);
+}
+
+// ---------------- cross thread ----------------
+void cross_thread(int iters) {
+  cairn::Executor exec;
+  cairn::Node node(opts("bench_cross", exec));
+  auto pub = node.create_publisher<Image>("bench/cross");
+  std::mutex mu;
+  std::condition_variable cv;
+  bool got = false;
+  Clock::time_point t0;
+  std::vector<double> lat;
+  lat.reserve(iters);
+  auto sub = node.create_subscription<Image>("bench/cross", cairn::QoS{}, [&](std::unique_ptr<Image>) {
+    const double d = ns_since(t0);
+    std::lock_guard l(mu);
+    lat.push_back(d);
+    got = true;
+    cv.notify_one();
+  });
+  std::thread spinner([&] { exec.spin(); });
+  auto round = [&](int n) {
+    for (int i = 0; i < n; ++i) {
+      auto m = std::make_unique<Image>();
+      m->data.resize(1024);
+      {
+        std::lock_guard l(mu);
+        got = false;
+      }
+      t0 = Clock::now();
+      pub->publish(std::move(m));
+      std::unique_lock l(mu);
+      cv.wait(l, [&] { return got; });
+    }
+  };
+  round(200);
+  lat.clear();
+  round(iters);
+  const auto s = stats(lat);
+  exec.cancel();
+  spinner.join();
+
+  // baseline: condition-variable hand-off of a unique_ptr to a waiting thread, same ping structure
+  std::mutex bm;
+  std::condition_variable bcv, back;
+  std::unique_ptr<Image> box;
+  bool stop = false, ack = false;
+  std::vector<double> blat;
+  blat.reserve(iters);
+  std::thread consumer([&] {
+    std::unique_lock l(bm);
+    for (;;) {
+      bcv.wait(l, [&] { return box || stop; });
+      if (stop) return;
+      blat.push_back(ns_since(t0));
+      box.reset();
+      ack = true;
+      back.notify_one();
+    }
+  });
+  for (int i = 0; i < iters + 200; ++i) {
+    if (i == 200) blat.clear();
+    auto m = std::make_unique<Image>();
+    m->data.resize(1024);
+    std::unique_lock l(bm);
+    ack = false;
+    t0 = Clock::now();
+    box = std::move(m);
+    bcv.notify_one();
+    back.wait(l, [&] { return ack; });
+  }
+  {
+    std::lock_guard l(bm);
+    stop = true;
+  }
+  bcv.notify_one();
+  consumer.join();
+  const auto b = stats(blat);
+  std::printf(
+      "{\"case\":\"cross_thread\",\"size\":\"1KiB\",\"p50_ns\":%.0f,\"p99_ns\":%.0f,\"max_ns\":%.0f,"
+      "\"baseline\":\"std::condition_variable hand-off\",\"baseline_p50_ns\":%.0f,\"baseline_p99_ns\":%.0f,"
+      "\"ratio_p50\":%.2f,\"goal\":\"ratio_p50<=1.2\"}\n",
+      s.p50, s.p99, s.max, b.p50, b.p99, b.p50 > 0 ? s.p50 / b.p50 : 0.0);
+  std::fflush(stdout);
+}
+
+// ---------------- DDS, two processes ----------------
+int pong_main() {
+  cairn::Executor::install_signal_handlers();
+  cairn::Executor exec;
+  cairn::Node node(opts("bench_pong", exec));
+  cairn::QoS q;
+  q.keep_last(1);
+  auto pub = node.create_publisher<Image>("bench/pong", q);
+  auto sub = node.create_subscription<Image>("bench/ping", q, [&](std::unique_ptr<Image> m) { pub->publish(std::move(m)); });
+  exec.spin();
+  return 0;
+}
+
+int sink_main(double seconds) {
+  cairn::Executor exec;
+  cairn::Node node(opts("bench_sink", exec));
+  cairn::QoS q;
+  q.keep_all();
+  long count = 0;
+  Clock::time_point first, last;
+  auto sub = node.create_subscription<Image>("bench/flood", q, [&](const Image&) {
+    if (count++ == 0) first = Clock::now();
+    last = Clock::now();
+  });
+  exec.spin_for(std::chrono::milliseconds(int64_t(seconds * 1000)));
+  const double dt = std::chrono::duration<double>(last - first).count();
+  std::printf("%ld %.6f\n", count, dt);
+  return 0;
+}
+
+struct DdsperfResult {
+  double p50_us = 0, p99_us = 0, max_us = 0, rate_ks = 0;
+  bool ok = false;
+};
+
+std::string run_capture(const std::string& cmd) {
+  std::string out;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return out;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  pclose(p);
+  return out;
+}
+
+double field(const std::string& line, const std::string& key) {
+  const auto p = line.find(key);
+  if (p == std::string::npos) return -1;
+  return std::atof(line.c_str() + p + key.size());
+}
+
+/// ddsperf ping/pong: median over the per-second lines of their 50%/99%/max (one-way = rtt/2).
+DdsperfResult ddsperf_ping(int domain, std::size_t size, double seconds) {
+  const std::string d = std::to_string(domain);
+  const pid_t pong = cairn::spawn_process({"/bin/sh", "-c", "exec ddsperf -i " + d + " pong > /dev/null 2>&1"});
+  std::this_thread::sleep_for(300ms);
+  const std::string out = run_capture("ddsperf -i " + d + " -D " + std::to_string(int(seconds) + 1) + " ping size " +
+                                      std::to_string(size) + " 2>&1");
+  kill(pong, SIGTERM);
+  waitpid(pong, nullptr, 0);
+  std::vector<double> p50, p99, mx;
+  std::istringstream in(out);
+  std::string line;
+  bool first = true;
+  while (std::getline(in, line)) {
+    if (line.find(" 50% ") == std::string::npos) continue;
+    if (first) {  // the first second includes discovery and warm-up
+      first = false;
+      continue;
+    }
+    p50.push_back(field(line, " 50% "));
+    p99.push_back(field(line, " 99% "));
+    mx.push_back(field(line, " max "));
+  }
+  DdsperfResult r;
+  if (p50.empty()) return r;
+  std::sort(p50.begin(), p50.end());
+  std::sort(p99.begin(), p99.end());
+  r.p50_us = p50[p50.size() / 2];
+  r.p99_us = p99[p99.size() / 2];
+  r.max_us = *std::max_element(mx.begin(), mx.end());
+  r.ok = true;
+  return r;
+}
+
+DdsperfResult ddsperf_throughput(int domain, std::size_t size, double seconds) {
+  const std::string d = std::to_string(domain);
+  const std::string log = "/tmp/cairn_bench_ddsperf_sub_" + std::to_string(getpid()) + ".txt";
+  const pid_t sub = cairn::spawn_process({"/bin/sh", "-c", "exec ddsperf -i " + d + " -D " +
+                                                               std::to_string(int(seconds) + 2) + " sub > " + log + " 2>&1"});
+  std::this_thread::sleep_for(300ms);
+  run_capture("ddsperf -i " + d + " -D " + std::to_string(int(seconds)) + " pub size " + std::to_string(size) + " 2>&1");
+  waitpid(sub, nullptr, 0);
+  std::vector<double> rates;
+  std::istringstream in(run_capture("cat " + log));
+  std::remove(log.c_str());
+  std::string line;
+  while (std::getline(in, line)) {
+    const double r = field(line, " rate ");
+    if (r > 0) rates.push_back(r);
+  }
+  DdsperfResult res;
+  if (rates.size() > 2) rates.erase(rates.begin());  // first second: discovery
+  if (rates.empty()) return res;
+  std::sort(rates.begin(), rates.end());
+  res.rate_ks = rates[rates.size() / 2];
+  res.ok = true;
+  return res;
+}
+
+void dds_rtt(const std::string& self, std::size_t size, double seconds) {
+  cairn::Executor exec;
+  cairn::Node node(opts("bench_ping", exec));
+  cairn::QoS q;
+  q.keep_last(1);
+  auto pub = node.create_publisher<Image>("bench/ping", q);
+  bool got = false;
+  std::unique_ptr<Image> back;
+  auto sub = node.create_subscription<Image>("bench/pong", q, [&](std::unique_ptr<Image> m) {
+    back = std::move(m);
+    got = true;
+  });
+  const pid_t pong = cairn::spawn_process({self, "pong"});
+  exec.spin_until([&] { return pub->inter_process_subscription_count() > 0 && sub->publisher_count_inter_process() > 0; }, 20s);
+  auto msg = std::make_unique<Image>();
+  msg->data.resize(size);
+  std::vector<double> half_rtt;
+  const auto run = [&](double secs, bool record) {
+    const auto end = Clock::now() + std::chrono::milliseconds(int64_t(secs * 1000));
+    while (Clock::now() < end) {
+      got = false;
+      const auto t0 = Clock::now();
+      pub->publish(std::move(msg));
+      if (!exec.spin_until([&] { return got; }, 2s)) {  // lost: re-create and go on
+        msg = std::make_unique<Image>();
+        msg->data.resize(size);
+        continue;
+      }
+      if (record) half_rtt.push_back(ns_since(t0) / 2);
+      msg = std::move(back);
+    }
+  };
+  run(1.0, false);
+  run(seconds, true);
+  kill(pong, SIGTERM);
+  waitpid(pong, nullptr, 0);
+  const auto s = stats(half_rtt);
+  const auto base = ddsperf_ping(node.context().domain_id(), size, seconds);
+  std::printf(
+      "{\"case\":\"dds_rtt\",\"size\":\"%s\",\"p50_us\":%.2f,\"p99_us\":%.2f,\"max_us\":%.1f,\"samples\":%zu,"
+      "\"baseline\":\"ddsperf ping/pong\",\"baseline_p50_us\":%.2f,\"baseline_p99_us\":%.2f,\"ratio_p50\":%.3f,"
+      "\"goal\":\"ratio_p50<=1.10\"}\n",
+      size_name(size).c_str(), s.p50 / 1000, s.p99 / 1000, s.max / 1000, s.n, base.p50_us, base.p99_us,
+      base.ok && base.p50_us > 0 ? (s.p50 / 1000) / base.p50_us : 0.0);
+  std::fflush(stdout);
+}
+
+void dds_throughput(const std::string& self, std::size_t size, double seconds) {
+  cairn::Executor exec;
+  cairn::Node node(opts("bench_flood", exec));
+  cairn::QoS q;
+  q.keep_all();
+  auto pub = node.create_publisher<Image>("bench/flood", q);
+  const std::string log = "/tmp/cairn_bench_sink_" + std::to_string(getpid()) + ".txt";
+  const pid_t sink = cairn::spawn_process({"/bin/sh", "-c", "exec " + self + " sink " + std::to_string(seconds + 2) +
+                                                                " > " + log});
+  exec.spin_until([&] { return pub->inter_process_subscription_count() > 0; }, 20s);
+  const auto end = Clock::now() + std::chrono::milliseconds(int64_t(seconds * 1000));
+  Image m;
+  m.data.resize(size);
+  while (Clock::now() < end) pub->publish(std::make_unique<Image>(m));
+  int st;
+  waitpid(sink, &st, 0);
+  long count = 0;
+  double dt = 0;
+  std::istringstream in(run_capture("cat " + log));
+  std::remove(log.c_str());
+  in >> count >> dt;
+  const double rate = dt > 0 ? count / dt / 1000 : 0;
+  const auto base = ddsperf_throughput(node.context().domain_id(), size, seconds);
+  std::printf(
+      "{\"case\":\"dds_throughput\",\"size\":\"%s\",\"kS_per_s\":%.1f,\"received\":%ld,\"baseline\":\"ddsperf pub/sub\","
+      "\"baseline_kS_per_s\":%.1f,\"ratio\":%.3f,\"goal\":\"ratio>=0.8\"}\n",
+      size_name(size).c_str(), rate, count, base.rate_ks, base.ok && base.rate_ks > 0 ? rate / base.rate_ks : 0.0);
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string mode = argc > 1 ? argv[1] : "";
+  if (mode == "pong") return pong_main();
+  if (mode == "sink") return sink_main(argc > 2 ? std::atof(argv[2]) : 5.0);
+  if (mode != "ipc") {
+    std::cerr << "usage: cairn bench ipc [--quick] [--only same_thread|cross_thread|dds_rtt|dds_throughput]\n";
+    return 2;
+  }
+  bool quick = false;
+  std::string only;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--quick") {
+      quick = true;
+    } else if (a == "--only" && i + 1 < argc) {
+      only = argv[++i];
+    } else {
+      std::cerr << "cairn: bench: unknown argument '" << a << "'\n";
+      return 2;
+    }
+  }
+  if (!std::getenv("CYCLONEDDS_URI")) {
+    std::cerr << "cairn: bench: set CYCLONEDDS_URI first (source scripts/env.sh: loopback only)\n";
+    return 2;
+  }
+  const std::string self = cairn::self_executable();
+  const double secs = quick ? 2 : 5;
+  auto want = [&](const char* c) { return only.empty() || only == c; };
+  if (want("same_thread")) {
+    same_thread(1024, quick ? 20000 : 200000);
+    same_thread(1 << 20, quick ? 2000 : 20000);
+  }
+  if (want("cross_thread")) cross_thread(quick ? 2000 : 20000);
+  if (want("dds_rtt")) {
+    for (std::size_t s : {std::size_t(12), std::size_t(1024), std::size_t(64 << 10), std::size_t(1 << 20)}) dds_rtt(self, s, secs);
+  }
+  if (want("dds_throughput")) dds_throughput(self, 1024, secs);
+  return 0;
+}
