@@ -21,7 +21,8 @@ namespace cairn::graph_slam {
 enum class Algorithm { kLevenbergMarquardt, kGaussNewton, kDogleg };
 
 /// Fill-reducing ordering of the variable blocks: kAuto tries AMD and METIS nested dissection on the block
-/// graph and keeps the one with less predicted fill.
+/// graph and keeps the one with less predicted fill. The default is AMD: on the benchmark pose graphs METIS
+/// saved < 1 % fill but cost up to 1.5 iterations of ordering time per structure change.
 enum class Ordering { kAuto, kAmd, kNestedDissection };
 
 /// CHOLMOD factorization kind; kAuto lets CHOLMOD choose from the flop count per factor nonzero.
@@ -43,7 +44,7 @@ struct OptimizerOptions {
   double initial_lambda = 1e-4;
   /// Dogleg: initial trust-region radius.
   double initial_radius = 1e4;
-  Ordering ordering = Ordering::kAuto;
+  Ordering ordering = Ordering::kAmd;
   Factorization factorization = Factorization::kAuto;
   /// Threads for linearization / cost evaluation (>= 1).
   int num_threads = 2;
