@@ -199,6 +199,26 @@ FreeSpaceGrid::FreeSpaceGrid(const World& world, double resolution, double clear
   for (const auto& c : circles)
     mark(c.center.x - c.radius, c.center.y - c.radius, c.center.x + c.radius, c.center.y + c.radius,
          [&](Vec2 p) { return norm(p - c.center) - c.radius; });
+  // Closed door panels: cells near the panel (not already blocked) are blocked while the door is closed.
+  door_of_cell_.assign(blocked_.size(), -1);
+  door_closed_.assign(world.doors.size(), false);
+  const double door_clearance = std::max(res_, 0.1);
+  for (std::size_t d = 0; d < world.doors.size(); ++d) {
+    const Vec2 a = world.doors[d].hinge, b = world.doors[d].latch;
+    const int cx0 = std::max(0, static_cast<int>((std::min(a.x, b.x) - door_clearance - min_.x) / res_));
+    const int cx1 = std::min(nx_ - 1, static_cast<int>((std::max(a.x, b.x) + door_clearance - min_.x) / res_) + 1);
+    const int cy0 = std::max(0, static_cast<int>((std::min(a.y, b.y) - door_clearance - min_.y) / res_));
+    const int cy1 = std::min(ny_ - 1, static_cast<int>((std::max(a.y, b.y) + door_clearance - min_.y) / res_) + 1);
+    for (int cy = cy0; cy <= cy1; ++cy)
+      for (int cx = cx0; cx <= cx1; ++cx) {
+        const Vec2 c{min_.x + (cx + 0.5) * res_, min_.y + (cy + 0.5) * res_};
+        if (!blocked_[index(cx, cy)] && pointSegDist(c, a, b) < door_clearance) door_of_cell_[index(cx, cy)] = static_cast<int>(d);
+      }
+  }
+}
+
+void FreeSpaceGrid::setDoorTime(const World& world, double t) {
+  for (std::size_t d = 0; d < world.doors.size() && d < door_closed_.size(); ++d) door_closed_[d] = !world.doors[d].isOpen(t);
 }
 
 bool FreeSpaceGrid::free(Vec2 p) const {
@@ -385,6 +405,7 @@ void PeopleSimulator::spawnCrowd(double t0, double t1) {
       const Region* to = world_.region(c.sinks[sink_idx]);
       Vec2 p0, p1;
       if (!free_->samplePoint(*from, rng_, p0) || !free_->samplePoint(*to, rng_, p1)) continue;
+      free_->setDoorTime(world_, t);  // people do not plan through doors that are closed when they start
       auto path = free_->plan(p0, p1);
       if (path.size() < 2) continue;
       Agent a;

@@ -206,3 +206,16 @@ TEST(PeopleSimulator, WorldPeopleSectionWithRecordedEthData) {
   EXPECT_GE(max_people, 3u);
   EXPECT_THROW(parseWorld("walls: [[[0,0],[1,0]]]\npeople: [{kind: csv, file: nothere.csv}]\n", "/tmp/x.yaml"), InputError);
 }
+
+TEST(FreeSpace, ClosedDoorsBlockPlanning) {
+  const World w = parseWorld(
+      "walls:\n  - [[0,0],[10,0],[10,10],[0,10],[0,0]]\n  - [[5,0],[5,4]]\n  - [[5,5],[5,10]]\n"
+      "doors: [{hinge: [5, 4], latch: [5, 5], schedule: [{t: 0, open: true}, {t: 100, open: false}]}]\n",
+      "t.yaml");
+  FreeSpaceGrid grid(w, 0.1, 0.3);
+  grid.setDoorTime(w, 50.0);
+  EXPECT_FALSE(grid.plan({2, 1}, {8, 1}).empty());
+  grid.setDoorTime(w, 150.0);
+  EXPECT_TRUE(grid.plan({2, 1}, {8, 1}).empty());  // the only passage is closed
+  EXPECT_FALSE(grid.plan({2, 1}, {2, 8}).empty()); // same room: still reachable
+}

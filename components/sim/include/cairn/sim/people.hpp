@@ -60,17 +60,25 @@ class FreeSpaceGrid {
   bool free(Vec2 p) const;
   /// Shortest 8-connected path from a to b through free cells, shortcut by line of sight; empty if none.
   std::vector<Vec2> plan(Vec2 a, Vec2 b) const;
+  /// Doors closed at time t block their doorway for the following plan() calls.
+  void setDoorTime(const World& world, double t);
   /// A random free point inside the region (rejection sampling); returns false if none found.
   bool samplePoint(const Region& region, Rng& rng, Vec2& out) const;
 
  private:
   int index(int cx, int cy) const { return cy * nx_ + cx; }
-  bool cellFree(int cx, int cy) const { return cx >= 0 && cy >= 0 && cx < nx_ && cy < ny_ && !blocked_[index(cx, cy)]; }
+  bool cellFree(int cx, int cy) const {
+    if (cx < 0 || cy < 0 || cx >= nx_ || cy >= ny_) return false;
+    const int i = index(cx, cy);
+    return !blocked_[i] && (door_of_cell_[i] < 0 || !door_closed_[static_cast<std::size_t>(door_of_cell_[i])]);
+  }
   bool lineFree(Vec2 a, Vec2 b) const;
   double res_;
   Vec2 min_;
   int nx_ = 0, ny_ = 0;
   std::vector<std::uint8_t> blocked_;
+  std::vector<int> door_of_cell_;    ///< door whose closed panel blocks the cell, or -1
+  std::vector<bool> door_closed_;
 };
 
 /// All people of a world at the current sim time. Deterministic for a given seed.
