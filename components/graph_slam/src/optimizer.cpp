@@ -126,7 +126,8 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   double x_norm = stateNorm(x);
   // Dogleg state: Gauss-Newton step and Cauchy point for the current linearization.
   bool need_solve = true;
-  Eigen::VectorXd h_gn(n), h_sd(n);
+  Eigen::VectorXd h_gn(n), h_sd(n), dsq(n);
+  double step_norm_scaled = 0.0;
 
   while (n > 0 && sum.iterations < options_.max_iterations) {
     if (grad.lpNorm<Eigen::Infinity>() <= options_.gradient_tolerance) {
@@ -172,11 +173,16 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
     } else {
       ++sum.iterations;
       if (need_solve) {
+        // The trust region is measured in the scaled norm |D h| with D = sqrt(clamped diag H) (as Ceres does):
+        // rotations and translations of very different stiffness then get comparable step lengths.
+        dsq = dscale.cwiseSqrt();
         set_damping(0.0);
-        sys.cholesky().multiply(grad.data(), tmp.data());
-        const double gHg = grad.dot(tmp);
-        const double alpha = gHg > 0.0 ? grad.squaredNorm() / gHg : 0.0;
-        h_sd = -alpha * grad;
+        const Eigen::VectorXd v = grad.cwiseQuotient(dscale);  // D^-2 g
+        sys.cholesky().multiply(v.data(), tmp.data());
+        const double vHv = v.dot(tmp);
+        // Cauchy point in scaled coordinates: minimizer of the model along -D^-2 g.
+        const double alpha = vHv > 0.0 ? grad.dot(v) / vHv : 0.0;
+        h_sd = -alpha * v;
         bool ok = im.factorize();
         for (double mu = 1e-12; !ok && mu < 1e32; mu *= 100.0) {
           set_damping(mu);
@@ -191,20 +197,22 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
         set_damping(0.0);
         need_solve = false;
       }
-      const double gn_norm = h_gn.norm();
-      const double sd_norm = h_sd.norm();
+      const double gn_norm = h_gn.cwiseProduct(dsq).norm();
+      const double sd_norm = h_sd.cwiseProduct(dsq).norm();
       if (gn_norm <= radius) {
         step = h_gn;
       } else if (sd_norm >= radius || sd_norm == 0.0) {
         step = sd_norm > 0.0 ? Eigen::VectorXd(h_sd * (radius / sd_norm)) : Eigen::VectorXd(h_gn * (radius / gn_norm));
       } else {
-        // Powell's dogleg: the point where the segment Cauchy point -> GN step leaves the trust region.
+        // Powell's dogleg: where the segment Cauchy point -> GN step leaves the (scaled) trust region.
         const Eigen::VectorXd d = h_gn - h_sd;
-        const double c = h_sd.dot(d), dd = d.squaredNorm();
+        const Eigen::VectorXd ds = d.cwiseProduct(dsq);
+        const double c = h_sd.cwiseProduct(dsq).dot(ds), dd = ds.squaredNorm();
         const double disc = c * c + dd * (radius * radius - sd_norm * sd_norm);
         const double beta = (-c + std::sqrt(std::max(0.0, disc))) / dd;
         step = h_sd + beta * d;
       }
+      step_norm_scaled = step.cwiseProduct(dsq).norm();
       sys.cholesky().multiply(step.data(), tmp.data());
       // Predicted decrease of F = sum rho ~ F + 2 g^T h + h^T H h.
       pred = -(2.0 * grad.dot(step) + step.dot(tmp));
@@ -247,9 +255,11 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
     } else {
       accept = std::isfinite(new_cost) && ratio > 0.0;
       if (ratio > 0.75) {
-        radius = std::max(radius, 3.0 * step.norm());
+        radius = std::max(radius, 3.0 * step_norm_scaled);
       } else if (ratio < 0.25 || !std::isfinite(new_cost)) {
-        radius *= 0.5;
+        // Shrink below the step just tried: when that was the (shorter) Gauss-Newton step, halving the radius
+        // alone would propose the very same step again.
+        radius = 0.5 * std::min(radius, step_norm_scaled);
       }
       if (!accept && radius <= options_.parameter_tolerance * (x_norm + options_.parameter_tolerance)) {
         sum.converged = true;
