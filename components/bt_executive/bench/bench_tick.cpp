@@ -81,8 +81,8 @@ NodeFactory& factory() {
 
 void BM_Tick_Balanced1000(benchmark::State& st) {
   int n = 0;
+  ManualScheduler sched;  // outlives the tree
   Tree t = loadTreeFromText(factory(), balancedTreeXml(&n));
-  ManualScheduler sched;
   t.setScheduler(&sched);
   t.tickOnce();
   std::uint64_t a0 = g_allocs.load();
@@ -94,8 +94,8 @@ BENCHMARK(BM_Tick_Balanced1000);
 
 void BM_Tick_Balanced1000_Observed(benchmark::State& st) {
   int n = 0;
+  ManualScheduler sched;  // outlives the tree
   Tree t = loadTreeFromText(factory(), balancedTreeXml(&n));
-  ManualScheduler sched;
   t.setScheduler(&sched);
   std::uint64_t events = 0;
   t.addObserver([&](const TransitionEvent&) { ++events; });
@@ -191,8 +191,8 @@ void BM_Tick_ReactiveAsync(benchmark::State& st) {
   std::string body = "<ReactiveSequence>";
   for (int i = 0; i < 20; ++i) body += "<Ok/>";
   body += "<Parallel success_count=\"-1\"><Work/><Work/><Work/></Parallel></ReactiveSequence>";
+  ManualScheduler sched;  // outlives the tree
   Tree t = loadTreeFromText(f, "<root BTCPP_format=\"4\"><BehaviorTree ID=\"R\">" + body + "</BehaviorTree></root>");
-  ManualScheduler sched;
   t.setScheduler(&sched);
   t.tickOnce();
   std::uint64_t a0 = g_allocs.load();

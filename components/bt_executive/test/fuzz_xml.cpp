@@ -9,9 +9,9 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const cairn::bt::NodeFactory factory;
   std::string_view text(reinterpret_cast<const char*>(data), size);
+  cairn::bt::ManualScheduler sched;  // outlives the tree
   try {
     cairn::bt::Tree tree = cairn::bt::loadTreeFromText(factory, text);
-    cairn::bt::ManualScheduler sched;
     tree.setScheduler(&sched);
     for (int i = 0; i < 16; ++i) {
       if (tree.tickOnce() != cairn::bt::NodeStatus::RUNNING) break;

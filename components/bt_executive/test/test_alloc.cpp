@@ -44,8 +44,8 @@ TEST(Allocations, NoAllocationPerTickInSteadyState) {
   bb->set<std::int64_t>("mode", 1);
   LoadOptions o;
   o.blackboard = bb;
+  ManualScheduler sched;  // must outlive the tree: destroying a tree halts it, which cancels timers
   Tree t = loadTreeFromText(f, xml, o);
-  ManualScheduler sched;
   t.setScheduler(&sched);
   std::uint64_t events = 0;
   t.addObserver([&](const TransitionEvent&) { ++events; });
