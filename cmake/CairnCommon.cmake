@@ -73,16 +73,19 @@ function(cairn_add_gtest name)
     ENVIRONMENT "CAIRN_COMPONENT_PATH=${CAIRN_COMPONENT_OUTPUT_DIR}")
 endfunction()
 
-# Installs a package's exported targets with a <pkg>Config.cmake so that colcon's downstream packages
+# Installs a package's exported targets (TARGETS plus components added with cairn_add_component) with a
+# <pkg>Config.cmake so that colcon's downstream packages
 # can find_package() it.
 function(cairn_install_package pkg)
   cmake_parse_arguments(ARG "" "" "TARGETS;DEPENDENCIES" ${ARGN})
   include(GNUInstallDirs)
-  install(TARGETS ${ARG_TARGETS} EXPORT ${pkg}Targets
-    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
-    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
-    RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
-    INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  if(ARG_TARGETS)
+    install(TARGETS ${ARG_TARGETS} EXPORT ${pkg}Targets
+      LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+      ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+      RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+      INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  endif()
   install(EXPORT ${pkg}Targets NAMESPACE cairn:: DESTINATION share/${pkg}/cmake)
   set(deps "")
   foreach(d ${ARG_DEPENDENCIES})
@@ -106,6 +109,6 @@ function(cairn_add_component target)
   file(GENERATE OUTPUT ${CAIRN_COMPONENT_OUTPUT_DIR}/$<TARGET_FILE_NAME:${target}>.components
        CONTENT "${_classes}\n")
   include(GNUInstallDirs)
-  install(TARGETS ${target} LIBRARY DESTINATION lib/cairn_components)
+  install(TARGETS ${target} EXPORT ${PROJECT_NAME}Targets LIBRARY DESTINATION lib/cairn_components)
   install(FILES ${CAIRN_COMPONENT_OUTPUT_DIR}/$<TARGET_FILE_NAME:${target}>.components DESTINATION lib/cairn_components)
 endfunction()

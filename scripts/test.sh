@@ -3,5 +3,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install_deps.sh
-./scripts/build.sh
+./scripts/build.sh -DCAIRN_BUILD_BENCHMARKS=OFF
 ctest --test-dir build --output-on-failure -j "${CAIRN_TEST_JOBS:-2}" --timeout 600 "$@"
