@@ -7,8 +7,12 @@ change and review here; the YAML files next to this script are its output (run i
 """
 import math
 import os
+import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+# `generate_worlds.py [OUT_DIR]`: writes into OUT_DIR (default: next to this script); the test suite
+# regenerates into a temporary directory and compares with the committed YAML files.
+OUT = sys.argv[1] if len(sys.argv) > 1 else HERE
 
 
 def f(v):
@@ -110,7 +114,8 @@ class World:
                 out.append(f"  {n}: [" + ", ".join(pt(p) for p in pts) + "]")
         if self.crowd:
             out.append("crowd:\n" + self.crowd)
-        with open(os.path.join(HERE, self.name + ".yaml"), "w") as fh:
+        os.makedirs(OUT, exist_ok=True)
+        with open(os.path.join(OUT, self.name + ".yaml"), "w") as fh:
             fh.write("\n".join(out) + "\n")
 
 

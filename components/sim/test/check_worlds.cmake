@@ -1,0 +1,12 @@
+# Regenerates the shipped worlds into OUT and fails if any differs from the committed file in REF.
+execute_process(COMMAND ${PYTHON} ${GEN} ${OUT} RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "generate_worlds.py failed (${rc})")
+endif()
+foreach(w office apartment warehouse)
+  file(READ ${OUT}/${w}.yaml generated)
+  file(READ ${REF}/${w}.yaml committed)
+  if(NOT generated STREQUAL committed)
+    message(FATAL_ERROR "worlds/${w}.yaml differs from generate_worlds.py's output: edit the generator and rerun it")
+  endif()
+endforeach()
