@@ -1,6 +1,11 @@
 // The whole launch spec is validated before anything starts; each error names file:line and the key.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
 #include "cairn/launch.hpp"
 
 namespace {
@@ -132,4 +137,35 @@ TEST(LaunchSpec, BadValuesOfKnownKeys) {
 TEST(LaunchSpec, ComponentThatThrowsInItsConstructor) {
   const auto e = error_of("containers:\n  - name: c\n    components:\n      - class: cairn_test::Throws\n");
   EXPECT_EQ(e, "spec.yaml:4: cairn_test::Throws (/throws) cannot be constructed: deliberate failure");
+}
+
+TEST(LaunchSpec, ParameterFiles) {
+  const std::string dir = "/tmp/cairn_params_" + std::to_string(::getpid());
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream(dir + "/good.yaml") << "/talker:\n  ros__parameters:\n    rate_hz: 3.5\n    text: from file\n";
+    std::ofstream(dir + "/bad.yaml") << "/talker:\n  ros__parameters:\n    rate_hz: [1, {x: 2}]\n";
+    std::ofstream(dir + "/broken.yaml") << "/talker: [\n";
+  }
+  cairn::ComponentLoader loader;
+  auto spec = cairn::parse_launch_spec_text(
+      "containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n        params: {text: inline}\n"
+      "        params_file: good.yaml\n",
+      dir + "/spec.yaml");
+  const auto& p = spec.containers[0].components[0].params;
+  EXPECT_EQ(std::get<double>(p.at("rate_hz")), 3.5);
+  EXPECT_EQ(std::get<std::string>(p.at("text")), "inline") << "inline params win over the file";
+  EXPECT_NO_THROW(cairn::validate_launch_spec(spec, loader));
+  auto err = [&](const std::string& file) -> std::string {
+    try {
+      cairn::parse_launch_spec_text("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
+                                    "        params_file: " + file + "\n", dir + "/spec.yaml");
+    } catch (const cairn::LaunchError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(err("bad.yaml"), dir + "/bad.yaml:3: /talker.ros__parameters.rate_hz: parameter arrays hold scalars only");
+  EXPECT_EQ(err("broken.yaml").rfind(dir + "/broken.yaml:", 0), 0u) << err("broken.yaml");
+  EXPECT_EQ(err("missing.yaml"), dir + "/spec.yaml:5: component.params_file: cannot read '" + dir + "/missing.yaml'");
 }

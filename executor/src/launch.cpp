@@ -116,7 +116,8 @@ class SpecParser {
 
   LaunchComponent component(const YAML::Node& n, std::set<std::string>& fqns) {
     if (!n.IsMap()) fail(n, "components[]: expected a map");
-    allow_keys(n, "component", {"class", "name", "namespace", "params", "remap", "qos", "isolated", "intra_process"});
+    allow_keys(n, "component",
+               {"class", "name", "namespace", "params", "params_file", "remap", "qos", "isolated", "intra_process"});
     LaunchComponent c;
     c.line = line_of(n);
     if (!n["class"]) fail(n, "component: missing 'class'");
@@ -139,6 +140,11 @@ class SpecParser {
           fail(kv.second, "params." + k + ": " + e.what());
         }
       }
+    }
+    if (const auto pf = n["params_file"]) {
+      // ROS 2 parameter file: {<node fqn | /** | *>: {ros__parameters: {name: value}}}; params given inline win
+      if (!c.params_line) c.params_line = line_of(pf);
+      load_params_file(str(pf, "component.params_file"), c);
     }
     if (const auto r = n["remap"]) {
       c.remap_line = line_of(r);
@@ -176,6 +182,37 @@ class SpecParser {
     for (const auto& a : n["cmd"]) p.cmd.push_back(str(a, "process.cmd[]"));
     if (n["respawn"]) p.respawn = boolean(n["respawn"], "process.respawn");
     return p;
+  }
+
+  void load_params_file(const std::string& rel, LaunchComponent& c) const {
+    namespace fs = std::filesystem;
+    fs::path path = rel;
+    if (path.is_relative()) path = fs::path(file_).parent_path() / path;
+    std::ifstream in(path);
+    if (!in) throw LaunchError(file_, c.params_line, "component.params_file: cannot read '" + path.string() + "'");
+    YAML::Node root;
+    const std::string pfile = path.string();
+    try {
+      root = YAML::Load(in);
+    } catch (const YAML::Exception& e) {
+      throw LaunchError(pfile, e.mark.line >= 0 ? e.mark.line + 1 : 0, "YAML syntax error: " + e.msg);
+    }
+    if (!root.IsMap()) throw LaunchError(pfile, line_of(root), "a parameter file maps node names to {ros__parameters: {...}}");
+    for (const auto& kv : root) {
+      const std::string node = kv.first.as<std::string>();
+      if (node != c.fqn() && node != c.name && node != "/**" && node != "**" && node != "*") continue;
+      const auto rp = kv.second["ros__parameters"];
+      if (!rp || !rp.IsMap()) throw LaunchError(pfile, line_of(kv.second), node + ": expected ros__parameters: {name: value}");
+      for (const auto& p : rp) {
+        const std::string k = p.first.as<std::string>();
+        if (c.params.count(k)) continue;
+        try {
+          c.params[k] = parameter_from_yaml(p.second);
+        } catch (const std::exception& e) {
+          throw LaunchError(pfile, line_of(p.second), node + ".ros__parameters." + k + ": " + e.what());
+        }
+      }
+    }
   }
 
   static bool valid_name(const std::string& s) {
