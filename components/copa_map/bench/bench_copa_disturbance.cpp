@@ -52,13 +52,43 @@ int main(int argc, char** argv) {
       const auto it = gt.find({ix, iy, static_cast<int>(std::floor(t))});
       return it == gt.end() ? 0.0 : it->second;
     };
-    // A-D: free cells with people data nearest to the corners of the area, in patrol order.
+    // Largest 4-connected free region of the planning grid (isolated pockets between shelves are unreachable).
+    std::vector<int> comp(static_cast<std::size_t>(grid.nx) * grid.ny, -1);
+    int best_comp = -1;
+    std::size_t best_size = 0;
+    for (int start = 0, label = 0; start < grid.nx * grid.ny; ++start) {
+      if (comp[static_cast<std::size_t>(start)] >= 0 || !grid.free(start % grid.nx, start / grid.nx)) continue;
+      std::vector<int> stack{start};
+      comp[static_cast<std::size_t>(start)] = label;
+      std::size_t size = 0;
+      while (!stack.empty()) {
+        const int u = stack.back();
+        stack.pop_back();
+        ++size;
+        const int ux = u % grid.nx, uy = u / grid.nx;
+        const int nb[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+        for (const auto& d : nb) {
+          const int vx = ux + d[0], vy = uy + d[1];
+          if (!grid.free(vx, vy) || comp[static_cast<std::size_t>(vy * grid.nx + vx)] >= 0) continue;
+          comp[static_cast<std::size_t>(vy * grid.nx + vx)] = label;
+          stack.push_back(vy * grid.nx + vx);
+        }
+      }
+      if (size > best_size) {
+        best_size = size;
+        best_comp = label;
+      }
+      ++label;
+    }
+    // A-D: cells of that region with people data nearest to the corners of the area, in patrol order.
     const Eigen::Vector2d corners[4] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
     Eigen::Vector2d wp[4];
     for (int c = 0; c < 4; ++c) {
       double best = 1e300;
       for (const auto& [k, tot] : total) {
-        if (!grid.free(k.first, k.second)) continue;
+        if (!grid.free(k.first, k.second) ||
+            comp[static_cast<std::size_t>(k.second * grid.nx + k.first)] != best_comp)
+          continue;
         const Eigen::Vector2d p = grid.centre(k.first, k.second);
         if ((p - corners[c]).norm() < best) {
           best = (p - corners[c]).norm();
