@@ -1,0 +1,461 @@
+// cairn_people_tracking::PeopleTracker — the runtime adapter of the people_tracking core: LaserScan (+ Odometry
+// for robot-motion compensation) in; person detections, tracks, guide state and a person-masked scan out.
+// Thin: message conversion, parameter plumbing and calls into the core (detector.hpp, tracker.hpp, guide.hpp,
+// masking.hpp). Bad input (malformed scans, time going backwards, missing odometry) is logged and skipped.
+#include <dlfcn.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <deque>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cairn/component.hpp"
+#include "cairn/people_tracking/classifier.hpp"
+#include "cairn/people_tracking/detector.hpp"
+#include "cairn/people_tracking/guide.hpp"
+#include "cairn/people_tracking/masking.hpp"
+#include "cairn/people_tracking/tracker.hpp"
+#include "cairn_people_msgs/msg/GuideState.hpp"
+#include "cairn_people_msgs/msg/PersonDetections.hpp"
+#include "cairn_people_msgs/msg/TrackedPersons.hpp"
+#include "cairn_people_msgs/srv/Follow.hpp"
+#include "nav_msgs/msg/Odometry.hpp"
+#include "sensor_msgs/msg/LaserScan.hpp"
+
+namespace cairn_people_tracking {
+
+namespace pt = cairn::people_tracking;
+namespace pmsg = cairn_people_msgs::msg;
+namespace psrv = cairn_people_msgs::srv;
+
+namespace {
+
+constexpr const char* kDefaultModel = "leg_adaboost_arras14.yml";  // the model `cairn people bench` uses
+
+double toSeconds(const builtin_interfaces::msg::Time& t) { return t.sec + 1e-9 * t.nanosec; }
+
+builtin_interfaces::msg::Time toTime(double s) {
+  builtin_interfaces::msg::Time t;
+  const double sec = std::floor(s);
+  t.sec = static_cast<int32_t>(sec);
+  t.nanosec = static_cast<uint32_t>(std::min(999999999.0, std::round((s - sec) * 1e9)));
+  return t;
+}
+
+double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+double yawOf(const geometry_msgs::msg::Quaternion& q) {
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
+// Directory of this component library (for models installed next to it: <prefix>/lib/cairn_components/x.so).
+std::filesystem::path libraryDir() {
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<const void*>(&libraryDir), &info) == 0 || info.dli_fname == nullptr) return {};
+  std::error_code ec;
+  auto p = std::filesystem::weakly_canonical(std::filesystem::path(info.dli_fname), ec);
+  return ec ? std::filesystem::path(info.dli_fname).parent_path() : p.parent_path();
+}
+
+// Model file: "" -> the shipped default. A relative path is tried against the working directory, the installed
+// share/cairn_people_tracking/models of this library's prefix and of $CMAKE_PREFIX_PATH/$COLCON_PREFIX_PATH, and
+// the package's source models/ directory (build tree). Throws std::invalid_argument naming what was tried.
+std::string resolveModelPath(const std::string& param) {
+  namespace fs = std::filesystem;
+  const std::string name = param.empty() ? kDefaultModel : param;
+  const fs::path p(name);
+  if (p.is_absolute()) {
+    if (!fs::exists(p)) throw std::invalid_argument("model_file: '" + name + "' does not exist");
+    return name;
+  }
+  std::vector<fs::path> candidates;
+  if (!param.empty()) candidates.push_back(fs::current_path() / p);
+  const fs::path lib = libraryDir();
+  if (!lib.empty()) candidates.push_back(lib.parent_path().parent_path() / "share/cairn_people_tracking/models" / p);
+  for (const char* var : {"CMAKE_PREFIX_PATH", "COLCON_PREFIX_PATH"}) {
+    const char* v = std::getenv(var);
+    if (v == nullptr) continue;
+    std::stringstream ss(v);
+    std::string prefix;
+    while (std::getline(ss, prefix, ':'))
+      if (!prefix.empty()) candidates.push_back(fs::path(prefix) / "share/cairn_people_tracking/models" / p);
+  }
+#ifdef CAIRN_PEOPLE_MODEL_DIR
+  candidates.push_back(fs::path(CAIRN_PEOPLE_MODEL_DIR) / p);
+#endif
+  for (const auto& c : candidates) {
+    std::error_code ec;
+    if (fs::is_regular_file(c, ec)) return c.string();
+  }
+  std::string tried;
+  for (const auto& c : candidates) tried += (tried.empty() ? "" : ", ") + c.string();
+  throw std::invalid_argument("model_file: '" + name + "' not found (tried " + tried + ")");
+}
+
+}  // namespace
+
+class PeopleTracker : public cairn::Node {
+ public:
+  explicit PeopleTracker(const cairn::NodeOptions& o) : cairn::Node(o) {
+    using D = cairn::ParameterDescriptor;
+    const std::string model_param = declare_parameter<std::string>(
+        "model_file", "", D{"leg classifier model (cairn people train); empty: the shipped " + std::string(kDefaultModel) +
+                               "; relative paths also searched in share/cairn_people_tracking/models", {}, {}, true});
+    use_odom_ = declare_parameter<bool>("use_odom", true, D{"compensate robot motion with `odom` (tracks in its frame); false: tracks in the laser frame", {}, {}, true});
+    odom_tolerance_ = declare_parameter<double>("odom_tolerance", 0.2, D{"s a scan may be newer/older than the odometry buffer (extrapolated with the twist)", 0.0, 2.0, true});
+    mount_.x = declare_parameter<double>("sensor_x", 0.0, D{"laser position in the odometry child (base) frame, m", -10.0, 10.0, true});
+    mount_.y = declare_parameter<double>("sensor_y", 0.0, D{"laser position in the base frame, m", -10.0, 10.0, true});
+    mount_.theta = declare_parameter<double>("sensor_yaw", 0.0, D{"laser yaw in the base frame, rad", -M_PI, M_PI, true});
+
+    // Detector (segmentation.hpp, detector.hpp).
+    pt::DetectorParams dp;
+    auto& sp = dp.segmentation;
+    sp.jump_base = declare_parameter<double>("segmentation.jump_base", sp.jump_base, D{"m, fixed part of the jump threshold", 0.0, 2.0, true});
+    sp.jump_beam_factor = declare_parameter<double>("segmentation.jump_beam_factor", sp.jump_beam_factor, D{"multiples of the beam spacing r*dtheta", 0.0, 50.0, true});
+    sp.max_gap_beams = static_cast<int>(declare_parameter<int64_t>("segmentation.max_gap_beams", sp.max_gap_beams, D{"invalid beams tolerated inside a cluster", 0.0, 20.0, true}));
+    sp.min_points = static_cast<std::size_t>(declare_parameter<int64_t>("segmentation.min_points", static_cast<int64_t>(sp.min_points), D{"smallest cluster", 1.0, 1000.0, true}));
+    sp.max_points = static_cast<std::size_t>(declare_parameter<int64_t>("segmentation.max_points", static_cast<int64_t>(sp.max_points), D{"largest cluster", 1.0, 100000.0, true}));
+    dp.min_leg_confidence = declare_parameter<double>("detector.min_leg_confidence", dp.min_leg_confidence, D{"classifier score to accept a leg", 0.0, 1.0, true});
+    dp.max_range = declare_parameter<double>("detector.max_range", dp.max_range, D{"m, clusters beyond are ignored", 0.1, 100.0, true});
+    dp.max_leg_width = declare_parameter<double>("detector.max_leg_width", dp.max_leg_width, D{"m, wider clusters are not legs", 0.01, 2.0, true});
+    dp.leg_center_offset = declare_parameter<double>("detector.leg_center_offset", dp.leg_center_offset, D{"m, leg centre behind the visible surface", 0.0, 0.5, true});
+    dp.max_leg_pair_distance = declare_parameter<double>("detector.max_leg_pair_distance", dp.max_leg_pair_distance, D{"m, legs closer than this are paired", 0.0, 3.0, true});
+    dp.single_leg_min_confidence = declare_parameter<double>("detector.single_leg_min_confidence", dp.single_leg_min_confidence, D{"score an unpaired cluster needs to become a person", 0.0, 1.0, true});
+    dp.sigma_pair = declare_parameter<double>("detector.sigma_pair", dp.sigma_pair, D{"m, position std of a paired-leg person", 1e-4, 5.0, true});
+    dp.sigma_single = declare_parameter<double>("detector.sigma_single", dp.sigma_single, D{"m, position std of a single-cluster person", 1e-4, 5.0, true});
+
+    // Tracker (tracker.hpp; Stüde §2.1.3).
+    pt::TrackerParams tp;
+    const std::string assoc = declare_parameter<std::string>("tracker.association", "gnn", D{"gnn | jpda", {}, {}, true});
+    try {
+      tp.association = pt::associationFromString(assoc);
+    } catch (const pt::InputError&) {
+      throw std::invalid_argument("parameter 'tracker.association' must be gnn or jpda, got '" + assoc + "'");
+    }
+    tp.process_noise = declare_parameter<double>("tracker.process_noise", tp.process_noise, D{"m^2/s^3, CV white-noise acceleration density", 1e-6, 100.0, true});
+    tp.initial_velocity_sigma = declare_parameter<double>("tracker.initial_velocity_sigma", tp.initial_velocity_sigma, D{"m/s, velocity std of a new track", 1e-3, 10.0, true});
+    tp.gate_chi2 = declare_parameter<double>("tracker.gate_chi2", tp.gate_chi2, D{"chi-square gate (2 dof)", 0.1, 100.0, true});
+    tp.confirm_hits = static_cast<int>(declare_parameter<int64_t>("tracker.confirm_hits", tp.confirm_hits, D{"associated scans until confirmed", 1.0, 100.0, true}));
+    tp.tentative_timeout = declare_parameter<double>("tracker.tentative_timeout", tp.tentative_timeout, D{"s without update deletes a tentative track", 0.0, 60.0, true});
+    tp.delete_timeout = declare_parameter<double>("tracker.delete_timeout", tp.delete_timeout, D{"s without update deletes a confirmed track", 0.0, 60.0, true});
+    tp.max_position_sigma = declare_parameter<double>("tracker.max_position_sigma", tp.max_position_sigma, D{"m, deletion when the position std grows beyond", 0.01, 100.0, true});
+    tp.min_init_distance = declare_parameter<double>("tracker.min_init_distance", tp.min_init_distance, D{"m, no new track this close to a confirmed one", 0.0, 5.0, true});
+    tp.publish_coast_time = declare_parameter<double>("tracker.publish_coast_time", tp.publish_coast_time, D{"s, coasting confirmed tracks are published this long", 0.0, 60.0, true});
+    tp.max_dt = declare_parameter<double>("tracker.max_dt", tp.max_dt, D{"s, larger forward time jumps reset the tracker", 0.01, 3600.0, true});
+    tp.detection_probability = declare_parameter<double>("tracker.detection_probability", tp.detection_probability, D{"JPDA P_D", 0.01, 1.0, true});
+    tp.clutter_density = declare_parameter<double>("tracker.clutter_density", tp.clutter_density, D{"JPDA false detections per m^2", 1e-9, 100.0, true});
+
+    // Guide (guide.hpp; Yuan §2.2.1).
+    pt::GuideParams gp;
+    gp.field_radius = declare_parameter<double>("guide.field_radius", gp.field_radius, D{"m, radius of the field in front of the robot (Yuan: 8 m)", 0.1, 100.0, true});
+    gp.field_half_angle = M_PI / 180.0 * declare_parameter<double>("guide.field_half_angle_deg", 90.0, D{"deg, half opening of the field (Yuan: semicircle)", 1.0, 180.0, true});
+    gp.select_max_distance = declare_parameter<double>("guide.select_max_distance", gp.select_max_distance, D{"m, follow(closest) considers people this close", 0.1, 100.0, true});
+    gp.lost_timeout = declare_parameter<double>("guide.lost_timeout", gp.lost_timeout, D{"s unmatched until Person Lost", 0.0, 60.0, true});
+    gp.auto_reacquire = declare_parameter<bool>("guide.auto_reacquire", gp.auto_reacquire, D{"re-acquire a track appearing near the lost guide", {}, {}, true});
+    gp.reacquire_radius = declare_parameter<double>("guide.reacquire_radius", gp.reacquire_radius, D{"m around the last guide position", 0.0, 20.0, true});
+    gp.reacquire_window = declare_parameter<double>("guide.reacquire_window", gp.reacquire_window, D{"s before Person Lost falls back to Search", 0.0, 3600.0, true});
+
+    // Masking (masking.hpp; Yuan §3.2.1).
+    mask_mode_ = declare_parameter<std::string>("mask.people", "all", D{"whom scan_masked hides: all (published tracks) | guide (Yuan §3.2.1) | none", {}, {}, true});
+    if (mask_mode_ != "all" && mask_mode_ != "guide" && mask_mode_ != "none")
+      throw std::invalid_argument("parameter 'mask.people' must be all, guide or none, got '" + mask_mode_ + "'");
+    mask_.leg_radius = declare_parameter<double>("mask.leg_radius", mask_.leg_radius, D{"m, added to half the leg separation", 0.0, 1.0, true});
+    mask_.margin = declare_parameter<double>("mask.margin", mask_.margin, D{"m, safety margin of r_P", 0.0, 2.0, true});
+    mask_.default_radius = declare_parameter<double>("mask.default_radius", mask_.default_radius, D{"m, r_P when the leg separation is unknown", 0.05, 3.0, true});
+    mask_.min_radius = declare_parameter<double>("mask.min_radius", mask_.min_radius, D{"m, smallest r_P", 0.0, 3.0, true});
+
+    // The model is loaded in a dry run too, so `cairn launch --check` reports a missing or corrupt model file.
+    const std::string model_path = resolveModelPath(model_param);
+    std::shared_ptr<const pt::LegClassifier> classifier;
+    try {
+      classifier = std::make_shared<const pt::LegClassifier>(pt::LegClassifier::load(model_path));
+    } catch (const pt::InputError& e) {
+      throw std::invalid_argument(std::string("model_file: ") + e.what());
+    }
+    detector_ = std::make_unique<pt::PersonDetector>(classifier, dp);
+    tracker_ = std::make_unique<pt::PeopleTracker>(tp);
+    guide_ = std::make_unique<pt::GuideTracker>(gp);
+
+    det_pub_ = create_publisher<pmsg::PersonDetections>("people/detections", cairn::QoS{});
+    track_pub_ = create_publisher<pmsg::TrackedPersons>("people/tracks", cairn::QoS{});
+    guide_pub_ = create_publisher<pmsg::GuideState>("people/guide", cairn::QoS{});
+    masked_pub_ = create_publisher<sensor_msgs::msg::LaserScan>("scan_masked", cairn::QoS::sensor_data());
+    scan_sub_ = create_subscription<sensor_msgs::msg::LaserScan>(
+        "scan", cairn::QoS::sensor_data(), [this](const sensor_msgs::msg::LaserScan& m) { onScan(m); });
+    if (use_odom_)
+      odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
+          "odom", cairn::QoS{}, [this](const nav_msgs::msg::Odometry& m) { onOdom(m); });
+    follow_srv_ = create_service<psrv::Follow_Request, psrv::Follow_Response>(
+        "people/follow", [this](const psrv::Follow_Request& rq, psrv::Follow_Response& rs) { onFollow(rq, rs); });
+    CAIRN_INFO(logger(), "model " << model_path << ", association " << assoc << ", "
+                                  << (use_odom_ ? "tracking in the odometry frame" : "tracking in the laser frame"));
+  }
+
+ private:
+  struct OdomSample {
+    double stamp;
+    pt::Pose2 pose;
+    double vx, vy, wz;  // body-frame twist
+  };
+
+  // At most one warning per key and second, with the number of suppressed repeats.
+  void warn(const std::string& key, const std::string& what) {
+    auto& w = warnings_[key];
+    const auto now = std::chrono::steady_clock::now();
+    if (w.count > 0 && now - w.last < std::chrono::seconds(1)) {
+      ++w.suppressed;
+      return;
+    }
+    CAIRN_WARN(logger(), what << (w.suppressed ? " (" + std::to_string(w.suppressed) + " similar suppressed)" : ""));
+    w.last = now;
+    w.suppressed = 0;
+    ++w.count;
+  }
+
+  void onOdom(const nav_msgs::msg::Odometry& m) {
+    const double t = toSeconds(m.header.stamp);
+    const auto& p = m.pose.pose;
+    if (!std::isfinite(t) || !std::isfinite(p.position.x) || !std::isfinite(p.position.y)) {
+      warn("odom_nan", "odom: non-finite stamp or position, ignored");
+      return;
+    }
+    if (!odom_.empty() && t < odom_.back().stamp) {
+      warn("odom_back", "odom: time went backwards (" + std::to_string(t) + " < " + std::to_string(odom_.back().stamp) +
+                            "), odometry buffer cleared");
+      odom_.clear();
+    }
+    if (!odom_.empty() && t == odom_.back().stamp) odom_.pop_back();
+    odom_frame_ = m.header.frame_id;
+    const auto& tw = m.twist.twist;
+    odom_.push_back({t, pt::Pose2{p.position.x, p.position.y, yawOf(p.orientation)},
+                     std::isfinite(tw.linear.x) ? tw.linear.x : 0.0, std::isfinite(tw.linear.y) ? tw.linear.y : 0.0,
+                     std::isfinite(tw.angular.z) ? tw.angular.z : 0.0});
+    while (odom_.size() > 2 && odom_.back().stamp - odom_.front().stamp > kOdomHistory) odom_.pop_front();
+  }
+
+  // Robot (base) pose in the odometry frame at time t: interpolated inside the buffer, extrapolated with the
+  // twist up to odom_tolerance beyond it.
+  std::optional<pt::Pose2> robotPoseAt(double t, std::string& why) const {
+    if (odom_.empty()) {
+      why = "no odometry received yet";
+      return std::nullopt;
+    }
+    const auto& last = odom_.back();
+    if (t >= last.stamp) {
+      const double dt = t - last.stamp;
+      if (dt > odom_tolerance_) {
+        why = "odometry is " + std::to_string(dt) + " s older than the scan (odom_tolerance " + std::to_string(odom_tolerance_) + ")";
+        return std::nullopt;
+      }
+      const double c = std::cos(last.pose.theta), s = std::sin(last.pose.theta);
+      return pt::Pose2{last.pose.x + (c * last.vx - s * last.vy) * dt, last.pose.y + (s * last.vx + c * last.vy) * dt,
+                       wrapAngle(last.pose.theta + last.wz * dt)};
+    }
+    if (t <= odom_.front().stamp) {
+      if (odom_.front().stamp - t > odom_tolerance_) {
+        why = "scan is older than the odometry buffer";
+        return std::nullopt;
+      }
+      return odom_.front().pose;
+    }
+    for (std::size_t i = odom_.size() - 1; i > 0; --i) {
+      const auto& a = odom_[i - 1];
+      const auto& b = odom_[i];
+      if (a.stamp <= t && t <= b.stamp) {
+        const double u = (t - a.stamp) / (b.stamp - a.stamp);
+        return pt::Pose2{a.pose.x + u * (b.pose.x - a.pose.x), a.pose.y + u * (b.pose.y - a.pose.y),
+                         wrapAngle(a.pose.theta + u * wrapAngle(b.pose.theta - a.pose.theta))};
+      }
+    }
+    why = "no odometry bracket";
+    return std::nullopt;
+  }
+
+  void onScan(const sensor_msgs::msg::LaserScan& m) {
+    pt::LaserScan scan;
+    scan.stamp = toSeconds(m.header.stamp);
+    scan.angle_min = m.angle_min;
+    scan.angle_increment = m.angle_increment;
+    scan.range_min = m.range_min;
+    scan.range_max = m.range_max;
+    scan.ranges = m.ranges;
+    // ROS: angle_max = angle_min + (n - 1) * angle_increment; allow one beam of rounding.
+    if (std::isfinite(m.angle_increment) && m.angle_increment != 0.0f && !m.ranges.empty()) {
+      const double expected = (double(m.angle_max) - m.angle_min) / m.angle_increment + 1.0;
+      if (std::abs(expected - static_cast<double>(m.ranges.size())) > 1.5) {
+        warn("scan_size", "scan: " + std::to_string(m.ranges.size()) + " ranges but angle_min/max/increment describe " +
+                              std::to_string(std::lround(expected)) + " beams, scan ignored");
+        return;
+      }
+    }
+    if (!m.intensities.empty() && m.intensities.size() != m.ranges.size()) {
+      warn("scan_intensities", "scan: " + std::to_string(m.intensities.size()) + " intensities for " +
+                                   std::to_string(m.ranges.size()) + " ranges, scan ignored");
+      return;
+    }
+    try {
+      pt::validateScan(scan);
+    } catch (const pt::InputError& e) {
+      warn("scan_invalid", std::string("scan: ") + e.what() + ", scan ignored");
+      return;
+    }
+
+    pt::Pose2 sensor = mount_;
+    if (use_odom_) {
+      std::string why;
+      const auto robot = robotPoseAt(scan.stamp, why);
+      if (!robot) {
+        warn("scan_no_odom", "scan at " + std::to_string(scan.stamp) + ": " + why + ", scan ignored");
+        return;
+      }
+      const Eigen::Vector2d p = robot->transform({mount_.x, mount_.y});
+      sensor = pt::Pose2{p.x(), p.y(), wrapAngle(robot->theta + mount_.theta)};
+    } else {
+      sensor = pt::Pose2{};  // tracking frame = laser frame
+    }
+    const std::string frame = use_odom_ ? odom_frame_ : m.header.frame_id;
+
+    std::vector<pt::PersonDetection> dets;
+    try {
+      dets = detector_->detect(scan);
+    } catch (const pt::InputError& e) {
+      warn("scan_invalid", std::string("scan: ") + e.what() + ", scan ignored");
+      return;
+    }
+    const pt::TrackerStatus st = tracker_->update(scan.stamp, dets, sensor);
+    if (st.reset) warn("tracker_reset", "tracker reset: " + st.reason);
+    last_tracks_ = tracker_->outputTracks();
+    last_sensor_ = sensor;
+    last_stamp_ = scan.stamp;
+    const pt::GuideStatus gs = guide_->update(last_tracks_, sensor, scan.stamp);
+    if (!gs.event.empty()) CAIRN_INFO(logger(), "guide " << gs.guide_id << ": " << gs.event);
+
+    auto dmsg = std::make_unique<pmsg::PersonDetections>();
+    dmsg->header = m.header;
+    for (std::size_t i = 0; i < dets.size(); ++i) {
+      const auto& d = dets[i];
+      pmsg::PersonDetection o;
+      o.detection_id = static_cast<uint32_t>(i);
+      o.position.x = d.position.x();
+      o.position.y = d.position.y();
+      o.covariance = {d.covariance(0, 0), d.covariance(0, 1), d.covariance(1, 0), d.covariance(1, 1)};
+      o.confidence = d.confidence;
+      o.leg_separation = d.leg_separation;
+      o.leg_count = static_cast<uint8_t>(d.legs);
+      o.source = d.source;
+      dmsg->detections.push_back(o);
+    }
+    det_pub_->publish(std::move(dmsg));
+
+    auto tmsg = std::make_unique<pmsg::TrackedPersons>();
+    tmsg->header.stamp = m.header.stamp;
+    tmsg->header.frame_id = frame;
+    for (const auto& t : last_tracks_) {
+      pmsg::TrackedPerson o;
+      o.track_id = static_cast<uint32_t>(t.id);
+      o.position.x = t.position().x();
+      o.position.y = t.position().y();
+      o.velocity.x = t.velocity().x();
+      o.velocity.y = t.velocity().y();
+      for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) o.covariance[static_cast<std::size_t>(4 * r + c)] = t.covariance(r, c);
+      o.age = t.age();
+      o.confidence = t.confidence;
+      o.leg_separation = t.leg_separation;
+      o.stamp = toTime(t.stamp);
+      tmsg->tracks.push_back(o);
+    }
+    track_pub_->publish(std::move(tmsg));
+
+    auto gmsg = std::make_unique<pmsg::GuideState>();
+    gmsg->header.stamp = m.header.stamp;
+    gmsg->header.frame_id = frame;
+    gmsg->state = gs.state == pt::GuideState::kTracking     ? pmsg::GuideState_Constants::TRACKING
+                  : gs.state == pt::GuideState::kPersonLost ? pmsg::GuideState_Constants::PERSON_LOST
+                                                            : pmsg::GuideState_Constants::SEARCH;
+    gmsg->track_id = gs.state == pt::GuideState::kSearch ? -1 : gs.guide_id;
+    gmsg->distance = gs.distance;
+    gmsg->bearing = gs.bearing;
+    if (gs.track) {
+      gmsg->position.x = gs.track->position().x();
+      gmsg->position.y = gs.track->position().y();
+    }
+    gmsg->event = gs.event;
+    guide_pub_->publish(std::move(gmsg));
+
+    // Person masking (Yuan §3.2.1): circles of r_P (from the leg spacing) around the people, in the laser frame.
+    std::vector<pt::MaskCircle> circles;
+    for (const auto& t : last_tracks_) {
+      if (mask_mode_ == "none") break;
+      if (mask_mode_ == "guide" && !(gs.state == pt::GuideState::kTracking && t.id == gs.guide_id)) continue;
+      circles.push_back({sensor.inverseTransform(t.position()), pt::personRadius(t.leg_separation, mask_)});
+    }
+    pt::maskScan(scan, circles);
+    auto smsg = std::make_unique<sensor_msgs::msg::LaserScan>(m);
+    smsg->ranges = std::move(scan.ranges);
+    masked_pub_->publish(std::move(smsg));
+  }
+
+  void onFollow(const psrv::Follow_Request& rq, psrv::Follow_Response& rs) {
+    namespace C = psrv::Follow_Request_Constants;
+    switch (rq.command) {
+      case C::CLOSEST_IN_FRONT:
+        rs.success = guide_->selectClosestInFront(last_tracks_, last_sensor_, last_stamp_);
+        if (!rs.success) rs.message = "nobody in front within guide.select_max_distance";
+        break;
+      case C::TRACK_ID:
+        rs.success = guide_->selectId(static_cast<int>(rq.track_id), last_tracks_, last_stamp_);
+        if (!rs.success) rs.message = "no published track " + std::to_string(rq.track_id);
+        break;
+      case C::RELEASE:
+        guide_->release();
+        rs.success = true;
+        break;
+      default:
+        rs.success = false;
+        rs.message = "unknown command " + std::to_string(rq.command) + " (0 closest in front, 1 track id, 2 release)";
+    }
+    rs.track_id = guide_->state() == pt::GuideState::kSearch ? -1 : guide_->guideId();
+    if (rs.success) CAIRN_INFO(logger(), "follow: guide is now " << rs.track_id);
+  }
+
+  static constexpr double kOdomHistory = 5.0;  // s of odometry kept for interpolation
+
+  struct WarnState {
+    std::chrono::steady_clock::time_point last{};
+    std::size_t count = 0, suppressed = 0;
+  };
+
+  bool use_odom_ = true;
+  double odom_tolerance_ = 0.2;
+  pt::Pose2 mount_;
+  std::string mask_mode_;
+  pt::MaskParams mask_;
+  std::unique_ptr<pt::PersonDetector> detector_;
+  std::unique_ptr<pt::PeopleTracker> tracker_;
+  std::unique_ptr<pt::GuideTracker> guide_;
+  std::deque<OdomSample> odom_;
+  std::string odom_frame_ = "odom";
+  std::vector<pt::Track> last_tracks_;
+  pt::Pose2 last_sensor_;
+  double last_stamp_ = 0.0;
+  std::map<std::string, WarnState> warnings_;
+  std::shared_ptr<cairn::Publisher<pmsg::PersonDetections>> det_pub_;
+  std::shared_ptr<cairn::Publisher<pmsg::TrackedPersons>> track_pub_;
+  std::shared_ptr<cairn::Publisher<pmsg::GuideState>> guide_pub_;
+  std::shared_ptr<cairn::Publisher<sensor_msgs::msg::LaserScan>> masked_pub_;
+  std::shared_ptr<cairn::Subscription<sensor_msgs::msg::LaserScan>> scan_sub_;
+  std::shared_ptr<cairn::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
+  std::shared_ptr<cairn::Service<psrv::Follow_Request, psrv::Follow_Response>> follow_srv_;
+};
+
+}  // namespace cairn_people_tracking
+
+CAIRN_REGISTER_COMPONENT(cairn_people_tracking::PeopleTracker)

@@ -1,0 +1,415 @@
+// cairn_people_tracking::PeopleTracker in a container: synthetic scans of two walking people (the core's scene
+// generator, seeded) and odometry of a moving robot arrive over DDS from another context; tracks must come back
+// on people/tracks with stable ids at the people's positions in the odometry frame (robot motion compensated),
+// the follow service must select the guide, scan_masked must hide only the guide (mask.people: guide, Yuan
+// §3.2.1), and malformed scans must be skipped without stopping the component. Also: launch-spec validation of
+// the component's parameters.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <random>
+#include <thread>
+
+#include "cairn/container.hpp"
+#include "cairn/launch.hpp"
+#include "cairn/people_tracking/scene.hpp"
+#include "cairn_people_msgs/msg/GuideState.hpp"
+#include "cairn_people_msgs/msg/TrackedPersons.hpp"
+#include "cairn_people_msgs/srv/Follow.hpp"
+#include "nav_msgs/msg/Odometry.hpp"
+#include "sensor_msgs/msg/LaserScan.hpp"
+
+using namespace std::chrono_literals;
+namespace pt = cairn::people_tracking;
+namespace pmsg = cairn_people_msgs::msg;
+namespace psrv = cairn_people_msgs::srv;
+
+namespace {
+
+builtin_interfaces::msg::Time stampOf(double s) {
+  builtin_interfaces::msg::Time t;
+  t.sec = static_cast<int32_t>(std::floor(s));
+  t.nanosec = static_cast<uint32_t>(std::llround((s - std::floor(s)) * 1e9));
+  return t;
+}
+
+sensor_msgs::msg::LaserScan toMsg(const pt::LaserScan& s) {
+  sensor_msgs::msg::LaserScan m;
+  m.header.stamp = stampOf(s.stamp);
+  m.header.frame_id = "laser";
+  m.angle_min = static_cast<float>(s.angle_min);
+  m.angle_increment = static_cast<float>(s.angle_increment);
+  m.angle_max = static_cast<float>(s.angle_min + s.angle_increment * static_cast<double>(s.ranges.size() - 1));
+  m.range_min = static_cast<float>(s.range_min);
+  m.range_max = static_cast<float>(s.range_max);
+  m.ranges = s.ranges;
+  return m;
+}
+
+// Everything the test's own node hears, guarded by one mutex.
+struct Heard {
+  std::mutex mu;
+  std::map<int64_t, pmsg::TrackedPersons> tracks;  // by scan stamp (ns)
+  std::map<int64_t, pmsg::GuideState> guide;
+  std::map<int64_t, sensor_msgs::msg::LaserScan> masked;
+};
+int64_t key(const builtin_interfaces::msg::Time& t) { return int64_t{t.sec} * 1000000000 + t.nanosec; }
+
+bool waitFor(const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (!pred()) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(2ms);
+  }
+  return true;
+}
+
+// Two walkers and a robot driving forward while turning slowly; world frame == odometry frame.
+struct World {
+  pt::WalkerState a, b;
+  Eigen::Vector2d va{0.6, 0.0}, vb{0.4, 0.05};
+  double robot_v = 0.3, robot_w = 0.05;  // m/s, rad/s
+  pt::LaserModel laser;
+  std::mt19937_64 rng{6};  // seed: issue 6
+
+  World() {
+    a.position = {2.5, 1.2};
+    b.position = {4.5, -1.3};
+    a.heading = 0.0;
+    b.heading = std::atan2(vb.y(), vb.x());
+    a.gait_phase = 0.3;
+    b.gait_phase = 2.0;
+  }
+  pt::Pose2 robot(double t) const {
+    // exact arc of constant (v, w) from the origin
+    const double th = robot_w * t;
+    return pt::Pose2{robot_v / robot_w * std::sin(th), robot_v / robot_w * (1 - std::cos(th)), th};
+  }
+  Eigen::Vector2d personA(double t) const { return Eigen::Vector2d(2.5, 1.2) + va * t; }
+  Eigen::Vector2d personB(double t) const { return Eigen::Vector2d(4.5, -1.3) + vb * t; }
+
+  pt::LaserScan scanAt(double t, double dt) {
+    a.position = personA(t);
+    b.position = personB(t);
+    if (t > 0) {
+      pt::advanceGait(a, va.norm() * dt, dt);
+      pt::advanceGait(b, vb.norm() * dt, dt);
+    }
+    pt::Scene scene;
+    scene.addSegment({10.0, -6.0}, {10.0, 6.0}, pt::ObjectClass::kWall);
+    scene.addSegment({-2.0, -4.0}, {10.0, -4.0}, pt::ObjectClass::kWall);
+    scene.addSegment({-2.0, 4.5}, {10.0, 4.5}, pt::ObjectClass::kWall);
+    scene.addBox({7.0, 2.5}, 0.4, 0.3, 0.2, pt::ObjectClass::kClutter);
+    pt::addWalker(scene, a, 0);
+    pt::addWalker(scene, b, 1);
+    return pt::renderScan(scene, robot(t), laser, t, rng).scan;
+  }
+  nav_msgs::msg::Odometry odomAt(double t) const {
+    nav_msgs::msg::Odometry o;
+    o.header.stamp = stampOf(t);
+    o.header.frame_id = "odom";
+    o.child_frame_id = "base_link";
+    const auto p = robot(t);
+    o.pose.pose.position.x = p.x;
+    o.pose.pose.position.y = p.y;
+    o.pose.pose.orientation.z = std::sin(p.theta / 2);
+    o.pose.pose.orientation.w = std::cos(p.theta / 2);
+    o.twist.twist.linear.x = robot_v;
+    o.twist.twist.angular.z = robot_w;
+    return o;
+  }
+};
+
+// Id of the only track within `radius` of p, or nullopt.
+std::optional<uint32_t> trackNear(const pmsg::TrackedPersons& m, const Eigen::Vector2d& p, double radius) {
+  std::optional<uint32_t> id;
+  for (const auto& t : m.tracks)
+    if (std::hypot(t.position.x - p.x(), t.position.y - p.y()) < radius) {
+      if (id) return std::nullopt;
+      id = t.track_id;
+    }
+  return id;
+}
+
+}  // namespace
+
+TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMasksTheGuide) {
+  // The component, in an in-process container.
+  auto ctx = cairn::Context::create();
+  cairn::Executor exec;
+  cairn::ComponentLoader loader;
+  cairn::ComponentManager mgr(ctx, exec, "people_container", loader);
+  cairn::LoadRequest req{"cairn_people_tracking::PeopleTracker", "people_tracker"};
+  req.parameters["guide.select_max_distance"] = 5.0;
+  req.parameters["mask.people"] = std::string("guide");
+  const auto loaded = mgr.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  std::thread spinner([&] { exec.spin(); });
+
+  // The "robot" publishing scans and odometry from another context: everything goes over DDS.
+  auto sim_ctx = cairn::Context::create();
+  cairn::Executor sim_exec;
+  cairn::NodeOptions o("sim", &sim_exec);
+  o.context = sim_ctx;
+  o.start_parameter_services = false;
+  cairn::Node sim(o);
+  Heard heard;
+  auto scan_pub = sim.create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS::sensor_data());
+  auto odom_pub = sim.create_publisher<nav_msgs::msg::Odometry>("odom", cairn::QoS{});
+  auto tracks_sub = sim.create_subscription<pmsg::TrackedPersons>("people/tracks", cairn::QoS{}, [&](const pmsg::TrackedPersons& m, const cairn::MessageInfo& info) {
+    EXPECT_FALSE(info.from_intra_process);
+    std::lock_guard l(heard.mu);
+    heard.tracks[key(m.header.stamp)] = m;
+  });
+  auto guide_sub = sim.create_subscription<pmsg::GuideState>("people/guide", cairn::QoS{}, [&](const pmsg::GuideState& m) {
+    std::lock_guard l(heard.mu);
+    heard.guide[key(m.header.stamp)] = m;
+  });
+  auto masked_sub = sim.create_subscription<sensor_msgs::msg::LaserScan>("scan_masked", cairn::QoS::sensor_data(), [&](const sensor_msgs::msg::LaserScan& m) {
+    std::lock_guard l(heard.mu);
+    heard.masked[key(m.header.stamp)] = m;
+  });
+  auto follow = sim.create_client<psrv::Follow_Request, psrv::Follow_Response>("people/follow");
+  std::thread sim_spinner([&] { sim_exec.spin(); });
+  ASSERT_TRUE(waitFor([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s))
+      << "the component's subscriptions were not discovered";
+
+  auto received = [&](double t) {
+    std::lock_guard l(heard.mu);
+    return heard.tracks.count(key(stampOf(t))) > 0;
+  };
+
+  World world;
+  const double dt = 1.0 / 15.0;
+  const int steps = 75;
+  const int select_at = 30;
+  std::map<int, sensor_msgs::msg::LaserScan> sent;
+  std::optional<uint32_t> guide_reply;
+  int lost = 0;
+  for (int k = 0; k < steps; ++k) {
+    const double t = 100.0 + k * dt;  // stamps in seconds; odometry and scans share them
+    const double tl = k * dt;
+    pt::LaserScan s = world.scanAt(tl, dt);
+    s.stamp = t;
+    auto odom = world.odomAt(tl);
+    odom.header.stamp = stampOf(t);
+    odom_pub->publish(odom);
+    sent[k] = toMsg(s);
+    scan_pub->publish(sent[k]);
+    // Lock step: one scan in flight. A scan lost on the best-effort topic just counts as lost.
+    if (!waitFor([&] { return received(t); }, 3s)) ++lost;
+
+    if (k == select_at) {
+      psrv::Follow_Request rq;
+      rq.command = psrv::Follow_Request_Constants::CLOSEST_IN_FRONT;
+      const auto rs = follow->call(rq, 20s);
+      ASSERT_TRUE(rs.has_value()) << "follow service did not answer";
+      ASSERT_TRUE(rs->success) << rs->message;
+      guide_reply = static_cast<uint32_t>(rs->track_id);
+    }
+  }
+  EXPECT_LE(lost, 5) << "scans without a tracks message";
+
+  std::lock_guard l(heard.mu);
+  // After a warm-up of 15 scans: each person is matched by exactly one track within 0.35 m in most scans, the
+  // matched id never changes, and the two people never share an id. Positions are compared in the odometry
+  // frame, so a missing robot-motion compensation (the robot moves ~1.1 m and turns ~14 deg) fails this.
+  std::optional<uint32_t> id_a, id_b;
+  int matched_a = 0, matched_b = 0, considered = 0;
+  for (int k = 15; k < steps; ++k) {
+    const double t = 100.0 + k * dt;
+    const auto it = heard.tracks.find(key(stampOf(t)));
+    if (it == heard.tracks.end()) continue;
+    ++considered;
+    EXPECT_EQ(it->second.header.frame_id, "odom");
+    const auto a = trackNear(it->second, world.personA(k * dt), 0.35);
+    const auto b = trackNear(it->second, world.personB(k * dt), 0.35);
+    if (a) {
+      ++matched_a;
+      if (!id_a) id_a = a;
+      EXPECT_EQ(*a, *id_a) << "person A changed id at scan " << k;
+    }
+    if (b) {
+      ++matched_b;
+      if (!id_b) id_b = b;
+      EXPECT_EQ(*b, *id_b) << "person B changed id at scan " << k;
+    }
+    for (const auto& tr : it->second.tracks) {
+      EXPECT_LT(std::hypot(tr.velocity.x, tr.velocity.y), 2.0) << "implausible speed of track " << tr.track_id;
+    }
+  }
+  ASSERT_GE(considered, steps - 15 - 5);
+  EXPECT_GE(matched_a, considered * 9 / 10);
+  EXPECT_GE(matched_b, considered * 9 / 10);
+  ASSERT_TRUE(id_a && id_b);
+  EXPECT_NE(*id_a, *id_b);
+
+  // follow(closest in front) picked A (the closer one), and the guide state reports it from then on.
+  ASSERT_TRUE(guide_reply.has_value());
+  EXPECT_EQ(*guide_reply, *id_a);
+  int tracking = 0;
+  for (int k = select_at + 2; k < steps; ++k) {
+    const auto it = heard.guide.find(key(stampOf(100.0 + k * dt)));
+    if (it == heard.guide.end()) continue;
+    EXPECT_EQ(it->second.track_id, static_cast<int32_t>(*id_a));
+    tracking += it->second.state == pmsg::GuideState_Constants::TRACKING;
+  }
+  EXPECT_GE(tracking, 10);
+
+  // scan_masked (mask.people: guide): the beam towards A's centre is NaN, the beam towards B's is the raw return.
+  int checked = 0;
+  for (int k = select_at + 5; k < steps; ++k) {
+    const double t = 100.0 + k * dt;
+    const auto it = heard.masked.find(key(stampOf(t)));
+    if (it == heard.masked.end()) continue;
+    const auto& raw = sent[k];
+    ASSERT_EQ(it->second.ranges.size(), raw.ranges.size());
+    const auto robot = world.robot(k * dt);
+    auto beamTo = [&](const Eigen::Vector2d& p) {
+      const Eigen::Vector2d local = robot.inverseTransform(p);
+      return static_cast<std::size_t>(std::lround((std::atan2(local.y(), local.x()) - raw.angle_min) / raw.angle_increment));
+    };
+    const std::size_t ba = beamTo(world.personA(k * dt)), bb = beamTo(world.personB(k * dt));
+    EXPECT_TRUE(std::isnan(it->second.ranges[ba])) << "guide not masked at scan " << k;
+    EXPECT_EQ(it->second.ranges[bb], raw.ranges[bb]) << "a non-guide was masked at scan " << k;
+    std::size_t masked = 0;
+    for (std::size_t i = 0; i < raw.ranges.size(); ++i) masked += std::isnan(it->second.ranges[i]) && !std::isnan(raw.ranges[i]);
+    EXPECT_GT(masked, 5u);
+    EXPECT_LT(masked, 120u) << "more than the guide's circle masked";
+    ++checked;
+  }
+  EXPECT_GE(checked, 10);
+
+  sim_exec.cancel();
+  sim_spinner.join();
+  exec.cancel();
+  spinner.join();
+}
+
+TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning) {
+  auto ctx = cairn::Context::create();
+  cairn::Executor exec;
+  cairn::ComponentLoader loader;
+  cairn::ComponentManager mgr(ctx, exec, "people_container2", loader);
+  cairn::LoadRequest req{"cairn_people_tracking::PeopleTracker", "people_tracker"};
+  req.parameters["use_odom"] = false;  // tracks in the laser frame
+  const auto loaded = mgr.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  std::thread spinner([&] { exec.spin(); });
+
+  auto sim_ctx = cairn::Context::create();
+  cairn::Executor sim_exec;
+  cairn::NodeOptions o("sim", &sim_exec);
+  o.context = sim_ctx;
+  o.start_parameter_services = false;
+  cairn::Node sim(o);
+  Heard heard;
+  // Reliable scans here, so that "no output for a bad scan" is not confused with a lost scan.
+  auto scan_pub = sim.create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS{});
+  auto tracks_sub = sim.create_subscription<pmsg::TrackedPersons>("people/tracks", cairn::QoS{}, [&](const pmsg::TrackedPersons& m) {
+    std::lock_guard l(heard.mu);
+    heard.tracks[key(m.header.stamp)] = m;
+  });
+  std::thread sim_spinner([&] { sim_exec.spin(); });
+  ASSERT_TRUE(waitFor([&] { return scan_pub->inter_process_subscription_count() > 0; }, 20s));
+  auto received = [&](double t) {
+    std::lock_guard l(heard.mu);
+    return heard.tracks.count(key(stampOf(t))) > 0;
+  };
+
+  World world;
+  world.robot_v = 0.0;
+  world.robot_w = 1e-9;
+  const double dt = 1.0 / 15.0;
+  double t = 50.0;
+  // a good scan first (and the tracks writer discovered)
+  auto good = [&](double stamp) {
+    pt::LaserScan s = world.scanAt(stamp - 50.0, dt);
+    s.stamp = stamp;
+    return toMsg(s);
+  };
+  ASSERT_TRUE(waitFor([&] {
+    scan_pub->publish(good(t));
+    return waitFor([&] { return received(t); }, 300ms) || (t += dt, false);
+  }, 20s));
+
+  std::vector<std::pair<std::string, sensor_msgs::msg::LaserScan>> bad;
+  auto m = good(t + dt);
+  m.angle_max += 0.5f;  // metadata describe ~90 more beams than there are ranges
+  bad.emplace_back("mismatched angle metadata", m);
+  m = good(t + 2 * dt);
+  m.ranges.clear();
+  m.angle_max = m.angle_min;
+  bad.emplace_back("zero-length scan", m);
+  m = good(t + 3 * dt);
+  m.angle_increment = std::numeric_limits<float>::quiet_NaN();
+  bad.emplace_back("NaN angle increment", m);
+  m = good(t + 4 * dt);
+  m.intensities.assign(10, 1.0f);
+  bad.emplace_back("intensities of the wrong size", m);
+  for (const auto& [what, msg] : bad) scan_pub->publish(msg);
+
+  // NaN and inf ranges inside a well-formed scan are "no return": processed.
+  auto holes = good(t + 5 * dt);
+  for (std::size_t i = 0; i < holes.ranges.size(); i += 7) holes.ranges[i] = std::numeric_limits<float>::quiet_NaN();
+  for (std::size_t i = 3; i < holes.ranges.size(); i += 11) holes.ranges[i] = std::numeric_limits<float>::infinity();
+  scan_pub->publish(holes);
+  ASSERT_TRUE(waitFor([&] { return received(t + 5 * dt); }, 10s)) << "scan with NaN/inf ranges not processed";
+  // Time going backwards: processed (the tracker resets), and later scans too.
+  const double back = t - 10.0;
+  scan_pub->publish(good(back));
+  ASSERT_TRUE(waitFor([&] { return received(back); }, 10s)) << "scan after time went backwards not processed";
+  scan_pub->publish(good(back + dt));
+  ASSERT_TRUE(waitFor([&] { return received(back + dt); }, 10s));
+
+  std::lock_guard l(heard.mu);
+  // One reliable writer keeps its order: a bad scan that produced output would have arrived before `holes`.
+  for (std::size_t i = 0; i < bad.size(); ++i)
+    EXPECT_EQ(heard.tracks.count(key(bad[i].second.header.stamp)), 0u) << bad[i].first << " was not rejected";
+  EXPECT_EQ(heard.tracks.at(key(stampOf(back))).header.frame_id, "laser");
+  EXPECT_TRUE(heard.tracks.at(key(stampOf(back))).tracks.empty()) << "a reset tracker has no confirmed tracks";
+
+  sim_exec.cancel();
+  sim_spinner.join();
+  exec.cancel();
+  spinner.join();
+}
+
+namespace {
+std::string launchError(const std::string& params) {
+  cairn::ComponentLoader loader;
+  try {
+    auto spec = cairn::parse_launch_spec_text(
+        "containers:\n  - name: c\n    components:\n      - class: cairn_people_tracking::PeopleTracker\n"
+        "        params: " + params + "\n",
+        "people.yaml");
+    cairn::validate_launch_spec(spec, loader);
+  } catch (const cairn::LaunchError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(PeopleTrackerComponent, LaunchSpecValidatesItsParameters) {
+  EXPECT_EQ(launchError("{tracker.association: jpda, tracker.process_noise: 0.8, guide.auto_reacquire: false, "
+                        "segmentation.min_points: 4, mask.people: all, model_file: leg_svm_stuede5.yml}"),
+            "");
+  EXPECT_EQ(launchError("{tracker.process_noise: fast}"),
+            "people.yaml:5: params: /people_tracker: parameter 'tracker.process_noise' expects double, got string (\"fast\")");
+  auto e = launchError("{detector.min_leg_confidence: 1.5}");
+  EXPECT_NE(e.find("detector.min_leg_confidence"), std::string::npos) << e;
+  EXPECT_EQ(e.rfind("people.yaml:5:", 0), 0u) << e;
+  e = launchError("{segmentation.min_points: 2.5}");
+  EXPECT_NE(e.find("segmentation.min_points"), std::string::npos) << e;
+  e = launchError("{tracker.association: kalman}");
+  EXPECT_NE(e.find("'tracker.association' must be gnn or jpda, got 'kalman'"), std::string::npos) << e;
+  e = launchError("{model_file: no_such_model.yml}");
+  EXPECT_NE(e.find("model_file: 'no_such_model.yml' not found"), std::string::npos) << e;
+  e = launchError("{tracker.no_such_param: 1}");
+  EXPECT_NE(e.find("tracker.no_such_param"), std::string::npos) << e;
+}
