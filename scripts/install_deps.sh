@@ -6,7 +6,7 @@ PKGS=(
   build-essential cmake ninja-build pkg-config ccache git
   cyclonedds-dev cyclonedds-tools
   libeigen3-dev libsuitesparse-dev libceres-dev libopencv-dev libpcl-dev
-  libyaml-cpp-dev libtinyxml2-dev liburdfdom-dev liburdfdom-headers-dev
+  libyaml-cpp-dev libtinyxml2-dev liburdfdom-dev liburdfdom-headers-dev libbz2-dev libpng-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   colcon python3-colcon-cmake python3-colcon-test-result python3-colcon-package-selection
   python3-colcon-output python3-colcon-parallel-executor python3-colcon-library-path

@@ -4,8 +4,10 @@
 //                 baseline: handing the unique_ptr to a std::function directly.
 //   cross_thread  publisher on another thread than the subscriber's executor (event queue + wake-up);
 //                 baseline: a bare std::condition_variable hand-off between two threads.
-//   dds_rtt       two processes over DDS, round trip 12 B / 1 KiB / 64 KiB / 1 MiB;
-//                 baseline: ddsperf ping/pong (cyclonedds-tools) with the same sizes, same domain config.
+//   dds_rtt_executor / dds_rtt_immediate
+//                 two processes over DDS, round trip 12 B / 1 KiB / 64 KiB / 1 MiB, callbacks on executor
+//                 threads (default) or in an Immediate callback group (on Cyclone's receive thread);
+//                 baseline: ddsperf ping/pong (cyclonedds-tools) in waitset resp. listener mode, same sizes.
 //   dds_throughput 1 KiB reliable flood to another process; baseline: ddsperf pub/sub.
 // Latencies are one-way: half the round trip for dds_rtt, as ddsperf prints them.
 #include <sys/wait.h>
@@ -212,14 +214,17 @@ void cross_thread(int iters) {
 }
 
 // ---------------- DDS, two processes ----------------
-int pong_main() {
+int pong_main(bool immediate) {
   cairn::Executor::install_signal_handlers();
   cairn::Executor exec;
   cairn::Node node(opts("bench_pong", exec));
   cairn::QoS q;
   q.keep_last(1);
   auto pub = node.create_publisher<Image>("bench/pong", q);
-  auto sub = node.create_subscription<Image>("bench/ping", q, [&](std::unique_ptr<Image> m) { pub->publish(std::move(m)); });
+  auto group = node.create_callback_group(immediate ? cairn::CallbackGroup::Type::Immediate
+                                                    : cairn::CallbackGroup::Type::MutuallyExclusive);
+  auto sub = node.create_subscription<Image>(
+      "bench/ping", q, [&](std::unique_ptr<Image> m) { pub->publish(std::move(m)); }, group);
   exec.spin();
   return 0;
 }
@@ -264,12 +269,12 @@ double field(const std::string& line, const std::string& key) {
 }
 
 /// ddsperf ping/pong: median over the per-second lines of their 50%/99%/max (one-way = rtt/2).
-DdsperfResult ddsperf_ping(int domain, std::size_t size, double seconds) {
+DdsperfResult ddsperf_ping(int domain, std::size_t size, double seconds, const std::string& mode) {
   const std::string d = std::to_string(domain);
-  const pid_t pong = cairn::spawn_process({"/bin/sh", "-c", "exec ddsperf -i " + d + " pong > /dev/null 2>&1"});
+  const pid_t pong = cairn::spawn_process({"/bin/sh", "-c", "exec ddsperf -i " + d + " pong " + mode + " > /dev/null 2>&1"});
   std::this_thread::sleep_for(300ms);
   const std::string out = run_capture("ddsperf -i " + d + " -D " + std::to_string(int(seconds) + 1) + " ping size " +
-                                      std::to_string(size) + " 2>&1");
+                                      std::to_string(size) + " " + mode + " 2>&1");
   kill(pong, SIGTERM);
   waitpid(pong, nullptr, 0);
   std::vector<double> p50, p99, mx;
@@ -322,19 +327,31 @@ DdsperfResult ddsperf_throughput(int domain, std::size_t size, double seconds) {
   return res;
 }
 
-void dds_rtt(const std::string& self, std::size_t size, double seconds) {
+// immediate = false: callbacks on executor threads (the default, one thread hop per message, as ddsperf's
+// waitset mode); true: Immediate callback group, callbacks on Cyclone's receive thread (as ddsperf's
+// default listener mode).
+void dds_rtt(const std::string& self, std::size_t size, double seconds, bool immediate) {
   cairn::Executor exec;
   cairn::Node node(opts("bench_ping", exec));
   cairn::QoS q;
   q.keep_last(1);
   auto pub = node.create_publisher<Image>("bench/ping", q);
+  std::mutex mu;
+  std::condition_variable cv;
   bool got = false;
   std::unique_ptr<Image> back;
-  auto sub = node.create_subscription<Image>("bench/pong", q, [&](std::unique_ptr<Image> m) {
-    back = std::move(m);
-    got = true;
-  });
-  const pid_t pong = cairn::spawn_process({self, "pong"});
+  auto group = node.create_callback_group(immediate ? cairn::CallbackGroup::Type::Immediate
+                                                    : cairn::CallbackGroup::Type::MutuallyExclusive);
+  auto sub = node.create_subscription<Image>(
+      "bench/pong", q,
+      [&](std::unique_ptr<Image> m) {
+        std::lock_guard l(mu);
+        back = std::move(m);
+        got = true;
+        cv.notify_one();
+      },
+      group);
+  const pid_t pong = cairn::spawn_process({self, "pong", immediate ? "immediate" : "executor"});
   exec.spin_until([&] { return pub->inter_process_subscription_count() > 0 && sub->publisher_count_inter_process() > 0; }, 20s);
   auto msg = std::make_unique<Image>();
   msg->data.resize(size);
@@ -342,15 +359,26 @@ void dds_rtt(const std::string& self, std::size_t size, double seconds) {
   const auto run = [&](double secs, bool record) {
     const auto end = Clock::now() + std::chrono::milliseconds(int64_t(secs * 1000));
     while (Clock::now() < end) {
-      got = false;
+      {
+        std::lock_guard l(mu);
+        got = false;
+      }
       const auto t0 = Clock::now();
       pub->publish(std::move(msg));
-      if (!exec.spin_until([&] { return got; }, 2s)) {  // lost: re-create and go on
+      bool ok;
+      if (immediate) {
+        std::unique_lock l(mu);
+        ok = cv.wait_for(l, 2s, [&] { return got; });
+      } else {
+        ok = exec.spin_until([&] { return got; }, 2s);
+      }
+      if (!ok) {  // lost: re-create and go on
         msg = std::make_unique<Image>();
         msg->data.resize(size);
         continue;
       }
       if (record) half_rtt.push_back(ns_since(t0) / 2);
+      std::lock_guard l(mu);
       msg = std::move(back);
     }
   };
@@ -359,13 +387,14 @@ void dds_rtt(const std::string& self, std::size_t size, double seconds) {
   kill(pong, SIGTERM);
   waitpid(pong, nullptr, 0);
   const auto s = stats(half_rtt);
-  const auto base = ddsperf_ping(node.context().domain_id(), size, seconds);
+  const std::string mode = immediate ? "listener" : "waitset";
+  const auto base = ddsperf_ping(node.context().domain_id(), size, seconds, mode);
   std::printf(
-      "{\"case\":\"dds_rtt\",\"size\":\"%s\",\"p50_us\":%.2f,\"p99_us\":%.2f,\"max_us\":%.1f,\"samples\":%zu,"
-      "\"baseline\":\"ddsperf ping/pong\",\"baseline_p50_us\":%.2f,\"baseline_p99_us\":%.2f,\"ratio_p50\":%.3f,"
+      "{\"case\":\"dds_rtt_%s\",\"size\":\"%s\",\"p50_us\":%.2f,\"p99_us\":%.2f,\"max_us\":%.1f,\"samples\":%zu,"
+      "\"baseline\":\"ddsperf ping/pong %s\",\"baseline_p50_us\":%.2f,\"baseline_p99_us\":%.2f,\"ratio_p50\":%.3f,"
       "\"goal\":\"ratio_p50<=1.10\"}\n",
-      size_name(size).c_str(), s.p50 / 1000, s.p99 / 1000, s.max / 1000, s.n, base.p50_us, base.p99_us,
-      base.ok && base.p50_us > 0 ? (s.p50 / 1000) / base.p50_us : 0.0);
+      immediate ? "immediate" : "executor", size_name(size).c_str(), s.p50 / 1000, s.p99 / 1000, s.max / 1000, s.n,
+      mode.c_str(), base.p50_us, base.p99_us, base.ok && base.p50_us > 0 ? (s.p50 / 1000) / base.p50_us : 0.0);
   std::fflush(stdout);
 }
 
@@ -403,7 +432,7 @@ void dds_throughput(const std::string& self, std::size_t size, double seconds) {
 
 int main(int argc, char** argv) {
   const std::string mode = argc > 1 ? argv[1] : "";
-  if (mode == "pong") return pong_main();
+  if (mode == "pong") return pong_main(argc > 2 && std::string(argv[2]) == "immediate");
   if (mode == "sink") return sink_main(argc > 2 ? std::atof(argv[2]) : 5.0);
   if (mode != "ipc") {
     std::cerr << "usage: cairn bench ipc [--quick] [--only same_thread|cross_thread|dds_rtt|dds_throughput]\n";
@@ -435,7 +464,11 @@ int main(int argc, char** argv) {
   }
   if (want("cross_thread")) cross_thread(quick ? 2000 : 20000);
   if (want("dds_rtt")) {
-    for (std::size_t s : {std::size_t(12), std::size_t(1024), std::size_t(64 << 10), std::size_t(1 << 20)}) dds_rtt(self, s, secs);
+    for (bool immediate : {false, true}) {
+      for (std::size_t s : {std::size_t(12), std::size_t(1024), std::size_t(64 << 10), std::size_t(1 << 20)}) {
+        dds_rtt(self, s, secs, immediate);
+      }
+    }
   }
   if (want("dds_throughput")) dds_throughput(self, 1024, secs);
   return 0;

@@ -39,7 +39,10 @@ TimerBase::TimerBase(std::shared_ptr<CallbackGroup> g, std::shared_ptr<Clock> cl
   next_due_ = clock_->now().ns + period_.count();
 }
 
-void TimerBase::reset() { next_due_ = clock_->now().ns + period_.count(); }
+void TimerBase::reset() {
+  next_due_ = clock_->now().ns + period_.count();
+  canceled_ = false;
+}
 
 void TimerBase::execute() {
   if (canceled_) return;
@@ -47,6 +50,7 @@ void TimerBase::execute() {
   int64_t next = next_due_.load() + period_.count();
   if (next <= now) next = now + period_.count();  // missed periods are skipped, not replayed
   next_due_ = next;
+  if (one_shot_) canceled_ = true;
   cb_();
 }
 
@@ -114,6 +118,24 @@ void Executor::remove_timer(const TimerBase* t) {
   std::lock_guard l(mu_);
   timers_.erase(std::remove_if(timers_.begin(), timers_.end(), [t](const auto& p) { return p.get() == t; }),
                 timers_.end());
+}
+
+namespace {
+class PostedWork : public Executable {
+ public:
+  PostedWork(std::shared_ptr<CallbackGroup> g, std::function<void()> fn) : Executable(std::move(g)), fn_(std::move(fn)) {}
+
+ protected:
+  void execute() override { fn_(); }
+
+ private:
+  std::function<void()> fn_;
+};
+}  // namespace
+
+void Executor::post(std::function<void()> fn, std::shared_ptr<CallbackGroup> group) {
+  if (!group) group = std::make_shared<CallbackGroup>(CallbackGroup::Type::MutuallyExclusive);
+  schedule(std::make_shared<PostedWork>(std::move(group), std::move(fn)));
 }
 
 void Executor::notify() {

@@ -175,6 +175,18 @@ std::shared_ptr<TimerBase> Node::create_timer(std::chrono::nanoseconds period, s
   return t;
 }
 
+std::shared_ptr<TimerBase> Node::create_one_shot_timer(std::chrono::nanoseconds delay, std::function<void()> cb,
+                                                       std::shared_ptr<CallbackGroup> group) {
+  auto t = std::make_shared<TimerBase>(group ? group : default_group_, clock_, delay, std::move(cb));
+  t->set_one_shot(true);
+  if (!dry_run()) {
+    exec_->add_timer(t);
+    std::lock_guard l(mu_);
+    timers_.push_back(t);
+  }
+  return t;
+}
+
 void Node::enable_sim_time(bool on) {
   clock_->enable_sim_time(on);
   if (on && !clock_sub_ && !dry_run()) {

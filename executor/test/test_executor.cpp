@@ -134,3 +134,25 @@ TEST(Executor, DisableWaitsForTheRunningCallbackAndStopsFurtherRuns) {
   spinner.join();
   EXPECT_EQ(c->runs, 1);
 }
+
+TEST(Executor, PostRunsOnTheExecutorThreadAndOneShotTimersFireOnce) {
+  Executor exec;
+  std::thread::id where;
+  bool posted = false;
+  std::thread other([&] { exec.post([&] { where = std::this_thread::get_id(); posted = true; }); });
+  other.join();
+  exec.spin_until([&] { return posted; }, 5s);
+  EXPECT_TRUE(posted);
+  EXPECT_EQ(where, std::this_thread::get_id());
+  int fired = 0;
+  auto t = std::make_shared<cairn::TimerBase>(std::make_shared<CallbackGroup>(),
+                                              std::make_shared<cairn::Clock>(cairn::ClockType::Steady), 2ms,
+                                              [&] { ++fired; });
+  t->set_one_shot(true);
+  exec.add_timer(t);
+  exec.spin_for(30ms);
+  EXPECT_EQ(fired, 1);
+  t->reset();
+  exec.spin_for(30ms);
+  EXPECT_EQ(fired, 2) << "reset() re-arms a one-shot timer";
+}

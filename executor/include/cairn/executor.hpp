@@ -25,7 +25,11 @@ class Executor;
 
 class CallbackGroup {
  public:
-  enum class Type { MutuallyExclusive, Reentrant };
+  /// MutuallyExclusive: one callback of the group at a time; Reentrant: any number at once.
+  /// Immediate: subscription callbacks run on the thread that delivers the message (the publisher's thread
+  /// intra-process, Cyclone's receive thread for DDS) without going through an executor; the lowest
+  /// latency path (as ddsperf's listener mode), for short, thread-safe callbacks only.
+  enum class Type { MutuallyExclusive, Reentrant, Immediate };
   explicit CallbackGroup(Type t = Type::MutuallyExclusive) : type_(t) {}
   Type type() const { return type_; }
 
@@ -70,6 +74,8 @@ class TimerBase : public Executable {
   TimerBase(std::shared_ptr<CallbackGroup> g, std::shared_ptr<Clock> clock, std::chrono::nanoseconds period,
             std::function<void()> cb);
   std::chrono::nanoseconds period() const { return period_; }
+  /// A one-shot timer fires once, `period` after creation (or after reset()), then cancels itself.
+  void set_one_shot(bool on) { one_shot_ = on; }
   void cancel() { canceled_ = true; }
   bool canceled() const { return canceled_; }
   void reset();
@@ -87,6 +93,7 @@ class TimerBase : public Executable {
   std::function<void()> cb_;
   std::atomic<int64_t> next_due_;
   std::atomic<bool> canceled_{false};
+  bool one_shot_ = false;
   bool queued_ = false;  // guarded by the executor's mutex
 };
 
@@ -110,6 +117,9 @@ class Executor {
   void remove_timer(const TimerBase* t);
   /// Re-evaluates timers (a simulated clock moved).
   void notify();
+  /// Runs `fn` once on an executor thread, within `group` (null: a group of its own). Thread-safe; the
+  /// cheap way for another thread (an async reply, a behavior tree's requestTick) to get work done here.
+  void post(std::function<void()> fn, std::shared_ptr<CallbackGroup> group = nullptr);
 
   /// Serves work with `threads` threads (the calling one included) until cancel() or shutdown.
   void spin();

@@ -79,6 +79,9 @@ class Node {
   /// Timer on the steady clock.
   std::shared_ptr<TimerBase> create_wall_timer(std::chrono::nanoseconds period, std::function<void()> cb,
                                                std::shared_ptr<CallbackGroup> group = nullptr);
+  /// Fires once, `delay` from now on the node's ROS clock, then cancels itself (reset() re-arms it).
+  std::shared_ptr<TimerBase> create_one_shot_timer(std::chrono::nanoseconds delay, std::function<void()> cb,
+                                                   std::shared_ptr<CallbackGroup> group = nullptr);
   /// Timer on the node's ROS clock (simulated time when use_sim_time is set).
   std::shared_ptr<TimerBase> create_timer(std::chrono::nanoseconds period, std::function<void()> cb,
                                           std::shared_ptr<CallbackGroup> group = nullptr);

@@ -77,11 +77,15 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
       std::weak_ptr<Subscription<T>> weak = self;
       reader_ = std::make_unique<DdsReader>(*ctx, dds_topic_name(topic_), msgs::type_support<T>(), qos_, opts,
                                             [weak](DdsReader&) {
+                                              auto s = weak.lock();
+                                              if (!s) return;
+                                              if (s->immediate()) {  // on Cyclone's receive thread
+                                                s->guarded([&] { s->drain_dds(); });
+                                                return;
+                                              }
                                               // one wake-up drains everything that has arrived, so a burst
                                               // costs one queue entry, not one per sample
-                                              if (auto s = weak.lock(); s && !s->dds_pending_.exchange(true)) {
-                                                s->exec_->schedule(s);
-                                              }
+                                              if (!s->dds_pending_.exchange(true)) s->exec_->schedule(s);
                                             });
     }
   }
@@ -121,6 +125,11 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
     if (!reader_) return;
     // DDS leg: drain what has arrived; arrivals from now on schedule a new run
     dds_pending_.store(false);
+    drain_dds();
+  }
+
+  void drain_dds() {
+    if (!reader_) return;
     for (;;) {
       auto msg = std::make_unique<T>();
       MessageInfo info;
@@ -128,6 +137,8 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
       invoke(Item{std::move(msg), info});
     }
   }
+
+  bool immediate() const { return group() && group()->type() == CallbackGroup::Type::Immediate; }
 
  private:
   struct Item {
@@ -137,6 +148,10 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
 
   void deliver(Item&& item) {
     if (!enabled()) return;
+    if (immediate()) {
+      guarded([&] { invoke(std::move(item)); });
+      return;
+    }
     bool idle;
     {
       std::lock_guard l(mu_);
