@@ -1,0 +1,460 @@
+// cairn_sim::Simulator and cairn_sim::LogPlayer in an in-process container, heard from a node in another
+// context (everything crosses DDS): scans with the configured beam count and frame, cmd_vel moving the
+// odometry, /clock advancing and driving a use_sim_time node, the scripted route and people ground truth,
+// CARMEN playback with the log's timestamps, and load / launch-spec validation errors.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <unistd.h>
+#include <vector>
+
+#include "cairn/container.hpp"
+#include "cairn/launch.hpp"
+#include "cairn/sim/carmen.hpp"
+#include "cairn_sim_msgs/msg/PersonArray.hpp"
+#include "geometry_msgs/msg/Twist.hpp"
+#include "nav_msgs/msg/Odometry.hpp"
+#include "rosgraph_msgs/msg/Clock.hpp"
+#include "sensor_msgs/msg/LaserScan.hpp"
+#include "tf2_msgs/msg/TFMessage.hpp"
+
+using namespace std::chrono_literals;
+
+namespace {
+
+const std::string kRoot = CAIRN_SOURCE_ROOT;
+
+bool waitFor(const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (!pred()) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(5ms);
+  }
+  return true;
+}
+
+double seconds(const builtin_interfaces::msg::Time& t) { return t.sec + 1e-9 * t.nanosec; }
+int64_t nanos(const builtin_interfaces::msg::Time& t) { return int64_t{t.sec} * 1000000000 + t.nanosec; }
+double yawOf(const geometry_msgs::msg::Quaternion& q) {
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
+// A container with one component, spinning on its own thread.
+struct Container {
+  std::shared_ptr<cairn::Context> ctx = cairn::Context::create();
+  cairn::Executor exec;
+  cairn::ComponentLoader loader;
+  cairn::ComponentManager mgr;
+  std::thread spinner;
+  explicit Container(const std::string& name) : mgr(ctx, exec, name, loader) {}
+  cairn::LoadResult load(const cairn::LoadRequest& req) {
+    auto r = mgr.load(req);
+    if (r.ok && !spinner.joinable()) spinner = std::thread([this] { exec.spin(); });
+    return r;
+  }
+  ~Container() {
+    exec.cancel();
+    if (spinner.joinable()) spinner.join();
+  }
+};
+
+// The listening side: its own context, so every message arrives over DDS.
+struct Listener {
+  std::shared_ptr<cairn::Context> ctx = cairn::Context::create();
+  cairn::Executor exec;
+  std::unique_ptr<cairn::Node> node;
+  std::thread spinner;
+  explicit Listener(const std::string& name, std::map<std::string, cairn::ParameterValue> params = {}) {
+    cairn::NodeOptions o(name, &exec);
+    o.context = ctx;
+    o.start_parameter_services = false;
+    o.parameter_overrides = std::move(params);
+    node = std::make_unique<cairn::Node>(o);
+  }
+  void start() { spinner = std::thread([this] { exec.spin(); }); }
+  ~Listener() {
+    exec.cancel();
+    if (spinner.joinable()) spinner.join();
+  }
+};
+
+struct Heard {
+  std::mutex mu;
+  std::vector<sensor_msgs::msg::LaserScan> scans;
+  std::vector<nav_msgs::msg::Odometry> odom, truth;
+  std::vector<double> clock;
+  std::vector<geometry_msgs::msg::TransformStamped> tf;
+  std::vector<cairn_sim_msgs::msg::PersonArray> people;
+  bool all_dds = true;
+};
+
+template <class T>
+std::size_t sizeOf(Heard& h, const std::vector<T>& v) {
+  std::lock_guard l(h.mu);
+  return v.size();
+}
+
+}  // namespace
+
+TEST(SimulatorComponent, ScansOdometryClockAndCmdVelOverDds) {
+  Container c("sim_container");
+  cairn::LoadRequest req{"cairn_sim::Simulator", "simulator"};
+  req.parameters["world"] = std::string("office");
+  req.parameters["seed"] = int64_t{7};
+  req.parameters["real_time_factor"] = 4.0;
+  req.parameters["people.crowd"] = false;
+  const auto loaded = c.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+
+  Listener ls("listener");
+  Heard h;
+  auto& n = *ls.node;
+  auto scan_sub = n.create_subscription<sensor_msgs::msg::LaserScan>(
+      "scan", cairn::QoS::sensor_data().keep_last(50), [&](const sensor_msgs::msg::LaserScan& m, const cairn::MessageInfo& info) {
+        std::lock_guard l(h.mu);
+        h.all_dds = h.all_dds && !info.from_intra_process;
+        h.scans.push_back(m);
+      });
+  auto odom_sub = n.create_subscription<nav_msgs::msg::Odometry>("odom", cairn::QoS{}.keep_last(100), [&](const nav_msgs::msg::Odometry& m) {
+    std::lock_guard l(h.mu);
+    h.odom.push_back(m);
+  });
+  auto gt_sub = n.create_subscription<nav_msgs::msg::Odometry>("ground_truth", cairn::QoS{}.keep_last(100), [&](const nav_msgs::msg::Odometry& m) {
+    std::lock_guard l(h.mu);
+    h.truth.push_back(m);
+  });
+  auto clock_sub = n.create_subscription<rosgraph_msgs::msg::Clock>("/clock", cairn::QoS{}.keep_last(10), [&](const rosgraph_msgs::msg::Clock& m) {
+    std::lock_guard l(h.mu);
+    h.clock.push_back(seconds(m.clock));
+  });
+  auto tf_sub = n.create_subscription<tf2_msgs::msg::TFMessage>("/tf", cairn::QoS{}.keep_last(100), [&](const tf2_msgs::msg::TFMessage& m) {
+    std::lock_guard l(h.mu);
+    for (const auto& t : m.transforms) h.tf.push_back(t);
+  });
+  auto cmd_pub = n.create_publisher<geometry_msgs::msg::Twist>("cmd_vel", cairn::QoS{});
+  ls.start();
+
+  ASSERT_TRUE(waitFor([&] { return sizeOf(h, h.scans) >= 3 && sizeOf(h, h.odom) >= 20; }, 30s)) << "no scans/odometry over DDS";
+  ASSERT_TRUE(waitFor([&] { return cmd_pub->inter_process_subscription_count() > 0; }, 20s)) << "cmd_vel subscription not discovered";
+  {
+    std::lock_guard l(h.mu);
+    EXPECT_TRUE(h.all_dds);
+    const auto& s = h.scans.back();
+    EXPECT_EQ(s.header.frame_id, "laser");
+    EXPECT_EQ(s.ranges.size(), 720u) << "360 deg at 0.5 deg";
+    EXPECT_NEAR(s.angle_increment, M_PI / 360.0, 1e-6);
+    std::size_t finite = 0;
+    for (float r : s.ranges) finite += std::isfinite(r) && r >= s.range_min && r <= s.range_max;
+    EXPECT_GT(finite, 600u) << "the office walls are within 20 m in most directions";
+    EXPECT_EQ(h.odom.back().header.frame_id, "odom");
+    EXPECT_EQ(h.odom.back().child_frame_id, "base_link");
+    EXPECT_EQ(h.truth.back().header.frame_id, "map");
+  }
+  // Without cmd_vel the robot stands still at the world's start (2, 12.55, 0): odometry noise is ∝ distance.
+  nav_msgs::msg::Odometry before;
+  {
+    std::lock_guard l(h.mu);
+    before = h.odom.back();
+    EXPECT_NEAR(h.truth.back().pose.pose.position.x, 2.0, 1e-9);
+    EXPECT_NEAR(h.truth.back().pose.pose.position.y, 12.55, 1e-9);
+  }
+  EXPECT_NEAR(before.pose.pose.position.x, 2.0, 1e-9);
+
+  // Drive forward over DDS (repeated within the 0.5 s sim-time command timeout) until odometry shows 1 m.
+  geometry_msgs::msg::Twist fwd;
+  fwd.linear.x = 0.5;
+  const bool moved = waitFor([&] {
+    cmd_pub->publish(fwd);
+    std::this_thread::sleep_for(15ms);
+    std::lock_guard l(h.mu);
+    return h.odom.back().pose.pose.position.x > before.pose.pose.position.x + 1.0;
+  }, 60s);
+  ASSERT_TRUE(moved) << "cmd_vel did not move the odometry";
+  {
+    std::lock_guard l(h.mu);
+    const auto& o = h.odom.back();
+    EXPECT_GT(o.twist.twist.linear.x, 0.3);
+    EXPECT_NEAR(o.pose.pose.position.y, 12.55, 0.1) << "straight along the corridor";
+    // ground truth at the same stamp agrees within the odometry error (1 % scale error + noise)
+    bool compared = false;
+    for (auto it = h.truth.rbegin(); it != h.truth.rend(); ++it)
+      if (nanos(it->header.stamp) == nanos(o.header.stamp)) {
+        EXPECT_NEAR(it->pose.pose.position.x - 2.0, (o.pose.pose.position.x - 2.0) / 1.01, 0.05);
+        compared = true;
+        break;
+      }
+    EXPECT_TRUE(compared) << "ground_truth and odom share stamps";
+  }
+  // Turn in place.
+  double yaw0;
+  {
+    std::lock_guard l(h.mu);
+    yaw0 = yawOf(h.odom.back().pose.pose.orientation);
+  }
+  geometry_msgs::msg::Twist turn;
+  turn.angular.z = 1.0;
+  ASSERT_TRUE(waitFor([&] {
+    cmd_pub->publish(turn);
+    std::this_thread::sleep_for(15ms);
+    std::lock_guard l(h.mu);
+    return yawOf(h.odom.back().pose.pose.orientation) > yaw0 + 0.5;
+  }, 60s)) << "angular.z did not turn the robot";
+
+  std::lock_guard l(h.mu);
+  // /clock: strictly increasing sim time (starting near 0, not wall time), ahead of or equal to the data.
+  ASSERT_GE(h.clock.size(), 10u);
+  for (std::size_t i = 1; i < h.clock.size(); ++i) EXPECT_GT(h.clock[i], h.clock[i - 1]) << "at " << i;
+  EXPECT_GT(h.clock.back(), 2.0);
+  EXPECT_LT(h.clock.back(), 1e6) << "sim time, not wall time";
+  // /tf odom -> base_link carries exactly the odometry poses.
+  std::size_t matched = 0;
+  for (const auto& t : h.tf) {
+    EXPECT_EQ(t.header.frame_id, "odom");
+    EXPECT_EQ(t.child_frame_id, "base_link");
+    for (const auto& o : h.odom)
+      if (nanos(o.header.stamp) == nanos(t.header.stamp)) {
+        EXPECT_DOUBLE_EQ(t.transform.translation.x, o.pose.pose.position.x);
+        EXPECT_DOUBLE_EQ(t.transform.rotation.z, o.pose.pose.orientation.z);
+        ++matched;
+        break;
+      }
+  }
+  EXPECT_GT(matched, 20u);
+}
+
+TEST(SimulatorComponent, DrivesItsRoutePublishesPeopleAndDrivesSimTimeNodes) {
+  // A small world: a 10 m x 6 m room, a route along its middle and one scripted walker.
+  const auto dir = std::filesystem::temp_directory_path() / ("cairn_sim_component_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string world = (dir / "room.yaml").string();
+  std::ofstream(world) << "name: room\n"
+                          "walls:\n  - [[0, 0], [10, 0], [10, 6], [0, 6], [0, 0]]\n"
+                          "robot:\n  start: [1, 3, 0]\n"
+                          "routes:\n  line: [[1, 3], [8, 3]]\n"
+                          "people:\n  - {kind: scripted, waypoints: [[2, 1], [8, 1]], speed: 1.0, start_time: 0}\n";
+  Container c("route_container");
+  cairn::LoadRequest req{"cairn_sim::Simulator", "simulator"};
+  req.parameters["world"] = world;
+  req.parameters["route"] = std::string("line");
+  req.parameters["route_loop"] = false;
+  req.parameters["real_time_factor"] = 10.0;
+  req.parameters["laser.fov_deg"] = 180.0;
+  req.parameters["laser.resolution_deg"] = 1.0;
+  const auto loaded = c.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+
+  Listener ls("observer", {{"use_sim_time", true}});
+  Heard h;
+  auto& n = *ls.node;
+  auto scan_sub = n.create_subscription<sensor_msgs::msg::LaserScan>("scan", cairn::QoS::sensor_data(), [&](const sensor_msgs::msg::LaserScan& m) {
+    std::lock_guard l(h.mu);
+    h.scans.push_back(m);
+  });
+  auto gt_sub = n.create_subscription<nav_msgs::msg::Odometry>("ground_truth", cairn::QoS{}.keep_last(100), [&](const nav_msgs::msg::Odometry& m) {
+    std::lock_guard l(h.mu);
+    h.truth.push_back(m);
+  });
+  auto people_sub = n.create_subscription<cairn_sim_msgs::msg::PersonArray>("people/ground_truth", cairn::QoS{}.keep_last(100), [&](const cairn_sim_msgs::msg::PersonArray& m) {
+    std::lock_guard l(h.mu);
+    h.people.push_back(m);
+  });
+  ls.start();
+
+  // No cmd_vel at all: the route takes the robot from x = 1 towards x = 8.
+  ASSERT_TRUE(waitFor([&] {
+    std::lock_guard l(h.mu);
+    return !h.truth.empty() && h.truth.back().pose.pose.position.x > 4.0;
+  }, 60s)) << "the scripted route did not move the robot";
+  ASSERT_TRUE(waitFor([&] { return sizeOf(h, h.people) >= 10 && sizeOf(h, h.scans) >= 3; }, 30s));
+  // The observer's clock is the simulator's (use_sim_time over DDS).
+  ASSERT_TRUE(waitFor([&] { return n.now().seconds() > 1.0; }, 30s)) << "use_sim_time node did not follow /clock";
+  EXPECT_LT(n.now().seconds(), 1e6) << "sim time, not wall time";
+
+  std::lock_guard l(h.mu);
+  EXPECT_EQ(h.scans.back().ranges.size(), 181u) << "180 deg at 1 deg";
+  EXPECT_EQ(h.scans.back().header.frame_id, "laser");
+  EXPECT_NEAR(h.truth.back().pose.pose.position.y, 3.0, 0.2);
+  int checked = 0;
+  double last_stamp = -1;
+  for (const auto& pa : h.people) {
+    EXPECT_EQ(pa.header.frame_id, "map");
+    EXPECT_GE(seconds(pa.header.stamp), last_stamp);
+    last_stamp = seconds(pa.header.stamp);
+    ASSERT_EQ(pa.people.size(), 1u) << "one scripted walker";
+    const auto& p = pa.people[0];
+    EXPECT_NEAR(p.position.y, 1.0, 0.05);
+    EXPECT_GE(p.position.x, 2.0 - 0.05);
+    EXPECT_LE(p.position.x, 8.0 + 0.05);
+    EXPECT_NEAR(std::hypot(p.left_leg.x - p.right_leg.x, p.left_leg.y - p.right_leg.y) > 0.0, true, 0);
+    if (seconds(pa.header.stamp) > 0.5 && seconds(pa.header.stamp) < 5.5) {  // first leg of the walk: +x at 1 m/s
+      EXPECT_NEAR(p.velocity.x, 1.0, 0.05);
+      EXPECT_NEAR(p.position.x, 2.0 + seconds(pa.header.stamp), 0.1);
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 5);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(LogPlayerComponent, PlaysTheAcesExcerptWithTheLogTimestamps) {
+  const std::string file = kRoot + "/test/data/carmen/aces_head60.clf.bz2";
+#ifndef CAIRN_SIM_HAVE_BZIP2
+  GTEST_SKIP() << "built without bzip2";
+#endif
+  // Reference: the core's reader.
+  std::vector<int64_t> scan_stamps, odom_stamps;
+  {
+    cairn::sim::CarmenReader r(file);
+    cairn::sim::CarmenRecord rec;
+    while (r.next(rec)) {
+      const double t = cairn::sim::stampOf(rec);
+      builtin_interfaces::msg::Time m;
+      m.sec = static_cast<int32_t>(std::floor(t));
+      m.nanosec = static_cast<uint32_t>(std::round((t - std::floor(t)) * 1e9));
+      (std::holds_alternative<cairn::sim::CarmenLaser>(rec) ? scan_stamps : odom_stamps).push_back(nanos(m));
+    }
+  }
+  ASSERT_EQ(scan_stamps.size(), 23u);  // test/data/carmen/PROVENANCE.md
+  ASSERT_EQ(odom_stamps.size(), 24u);
+
+  // As fast as possible; reliable transient-local overrides make the count exact whatever the discovery order.
+  Container c("log_container");
+  cairn::LoadRequest req{"cairn_sim::LogPlayer", "log_player"};
+  req.parameters["file"] = file;
+  req.parameters["rate"] = 0.0;
+  cairn::QoSOverride keep;
+  keep.reliability = cairn::QoS::Reliability::Reliable;
+  keep.durability = cairn::QoS::Durability::TransientLocal;
+  keep.depth = 100;
+  req.qos_overrides["/scan"] = keep;
+  req.qos_overrides["/odom"] = keep;
+  keep.depth = 1;
+  req.qos_overrides["/clock"] = keep;
+  const auto loaded = c.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+
+  Listener ls("log_listener");
+  Heard h;
+  auto& n = *ls.node;
+  const auto q = cairn::QoS{}.keep_last(100).reliable().transient_local();
+  auto scan_sub = n.create_subscription<sensor_msgs::msg::LaserScan>("scan", q, [&](const sensor_msgs::msg::LaserScan& m) {
+    std::lock_guard l(h.mu);
+    h.scans.push_back(m);
+  });
+  auto odom_sub = n.create_subscription<nav_msgs::msg::Odometry>("odom", q, [&](const nav_msgs::msg::Odometry& m) {
+    std::lock_guard l(h.mu);
+    h.odom.push_back(m);
+  });
+  auto clock_sub = n.create_subscription<rosgraph_msgs::msg::Clock>("/clock", cairn::QoS{}.keep_last(1).reliable().transient_local(),
+                                                                   [&](const rosgraph_msgs::msg::Clock& m) {
+                                                                     std::lock_guard l(h.mu);
+                                                                     h.clock.push_back(seconds(m.clock));
+                                                                   });
+  ls.start();
+  const double last = std::max(scan_stamps.back(), odom_stamps.back()) * 1e-9;
+  ASSERT_TRUE(waitFor([&] {
+    std::lock_guard l(h.mu);
+    return h.scans.size() >= 23 && h.odom.size() >= 24 && !h.clock.empty() && std::abs(h.clock.back() - last) < 1e-6;
+  }, 30s)) << "log not played completely";
+  std::this_thread::sleep_for(200ms);  // nothing more may arrive
+
+  std::lock_guard l(h.mu);
+  ASSERT_EQ(h.scans.size(), 23u);
+  ASSERT_EQ(h.odom.size(), 24u);
+  for (std::size_t i = 0; i < h.scans.size(); ++i) {
+    EXPECT_EQ(nanos(h.scans[i].header.stamp), scan_stamps[i]) << "scan " << i;
+    EXPECT_EQ(h.scans[i].header.frame_id, "laser");
+    EXPECT_EQ(h.scans[i].ranges.size(), 180u);
+  }
+  for (std::size_t i = 0; i < h.odom.size(); ++i) EXPECT_EQ(nanos(h.odom[i].header.stamp), odom_stamps[i]) << "odom " << i;
+  EXPECT_EQ(h.odom[0].header.frame_id, "odom");
+}
+
+TEST(LogPlayerComponent, BadLogsAreLoadErrorsNamingFileAndLine) {
+  cairn::ComponentLoader loader;
+  auto ctx = cairn::Context::create();
+  cairn::Executor exec;
+  cairn::ComponentManager mgr(ctx, exec, "bad_log_container", loader);
+  cairn::LoadRequest req{"cairn_sim::LogPlayer", "log_player"};
+  req.parameters["file"] = std::string("/nonexistent/run.clf");
+  auto r = mgr.load(req);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.error.find("/nonexistent/run.clf"), std::string::npos) << r.error;
+
+  const std::string bad = kRoot + "/components/sim/test/data/bad_log.clf";
+  req.parameters["file"] = bad;
+  r = mgr.load(req);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.error.find("bad_log.clf:3: FLASER: expected 3 range readings"), std::string::npos) << r.error;
+
+  req.parameters["skip_malformed"] = true;
+  r = mgr.load(req);
+  EXPECT_TRUE(r.ok) << r.error;
+
+  cairn::LoadRequest none{"cairn_sim::LogPlayer", "no_file"};
+  r = mgr.load(none);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.error.find("parameter 'file' is required"), std::string::npos) << r.error;
+}
+
+namespace {
+std::string launchError(const std::string& cls, const std::string& params) {
+  cairn::ComponentLoader loader;
+  try {
+    auto spec = cairn::parse_launch_spec_text(
+        "containers:\n  - name: c\n    components:\n      - class: " + cls + "\n        params: " + params + "\n",
+        "sim.yaml");
+    cairn::validate_launch_spec(spec, loader);
+  } catch (const cairn::LaunchError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(SimulatorComponent, LaunchSpecValidationNamesFileLineAndParameter) {
+  EXPECT_EQ(launchError("cairn_sim::Simulator", "{world: warehouse, route: room_tour, seed: 3, real_time_factor: 20, "
+                                               "laser.fov_deg: 180, laser.resolution_deg: 0.25, odometry.scale_error: 0.02}"),
+            "");
+  // Constructor errors name the component's line, parameter type/range errors the params line.
+  auto e = launchError("cairn_sim::Simulator", "{world: atlantis}");
+  EXPECT_EQ(e.rfind("sim.yaml:4: cairn_sim::Simulator (/simulator) cannot be constructed: ", 0), 0u) << e;
+  EXPECT_NE(e.find("world: 'atlantis'"), std::string::npos) << e;
+  e = launchError("cairn_sim::Simulator", "{world: office, route: to_the_moon}");
+  EXPECT_EQ(e.rfind("sim.yaml:4: ", 0), 0u) << e;
+  EXPECT_NE(e.find("no route 'to_the_moon' (routes: corridor_patrol, visit_kitchen)"), std::string::npos) << e;
+  e = launchError("cairn_sim::Simulator", "{laser.fov_deg: 400}");
+  EXPECT_EQ(e.rfind("sim.yaml:5: ", 0), 0u) << e;
+  EXPECT_NE(e.find("laser.fov_deg"), std::string::npos) << e;
+  e = launchError("cairn_sim::Simulator", "{real_time_factor: fast}");
+  EXPECT_NE(e.find("'real_time_factor' expects double"), std::string::npos) << e;
+  e = launchError("cairn_sim::Simulator", "{people.file: /nonexistent/walkers.csv}");
+  EXPECT_NE(e.find("/nonexistent/walkers.csv"), std::string::npos) << e;
+  e = launchError("cairn_sim::Simulator", "{laser_rate: 10}");
+  EXPECT_NE(e.find("laser_rate"), std::string::npos) << e;
+  e = launchError("cairn_sim::LogPlayer", "{file: " + kRoot + "/components/sim/test/data/bad_log.clf}");
+  EXPECT_EQ(e.rfind("sim.yaml:4: ", 0), 0u) << e;
+  EXPECT_NE(e.find("bad_log.clf:3: FLASER"), std::string::npos) << e;
+  EXPECT_EQ(launchError("cairn_sim::LogPlayer", "{file: " + kRoot + "/test/data/carmen/aces_head60.clf, rate: 2.0}"), "");
+}
+
+TEST(SimulatorComponent, TheShippedDemoLaunchSpecValidates) {
+  // Paths in the spec (urdf_file) are relative to the repository root, where `cairn launch` is run.
+  const auto cwd = std::filesystem::current_path();
+  std::filesystem::current_path(kRoot);
+  cairn::ComponentLoader loader;
+  std::string error;
+  try {
+    cairn::validate_launch_spec(cairn::parse_launch_spec("launch_specs/sim_demo.yaml"), loader);
+  } catch (const cairn::LaunchError& e) {
+    error = e.what();
+  }
+  std::filesystem::current_path(cwd);
+  EXPECT_EQ(error, "");
+}
