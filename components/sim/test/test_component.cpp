@@ -17,6 +17,7 @@
 #include "cairn/container.hpp"
 #include "cairn/launch.hpp"
 #include "cairn/sim/carmen.hpp"
+#include "cairn/sim/simulator.hpp"
 #include "cairn_sim_msgs/msg/PersonArray.hpp"
 #include "geometry_msgs/msg/Twist.hpp"
 #include "nav_msgs/msg/Odometry.hpp"
@@ -300,6 +301,55 @@ TEST(SimulatorComponent, DrivesItsRoutePublishesPeopleAndDrivesSimTimeNodes) {
   }
   EXPECT_GE(checked, 5);
   std::filesystem::remove_all(dir);
+}
+
+TEST(SimulatorComponent, ScanStreamOverDdsEqualsTheCoreRunWithTheSameSeed) {
+  // The adapter adds nothing to the simulation: in route mode (no cmd_vel) the scans heard over DDS are the
+  // core's scans for the same world, seed and route, bit for bit, however the wall timer chunks the steps.
+  Container c("det_container");
+  cairn::LoadRequest req{"cairn_sim::Simulator", "simulator"};
+  req.parameters["world"] = std::string("office");
+  req.parameters["route"] = std::string("corridor_patrol");
+  req.parameters["seed"] = int64_t{5};
+  req.parameters["real_time_factor"] = 5.0;
+  cairn::QoSOverride keep;  // every scan from the first one on, whenever the listener is discovered
+  keep.reliability = cairn::QoS::Reliability::Reliable;
+  keep.durability = cairn::QoS::Durability::TransientLocal;
+  keep.depth = 1000;
+  req.qos_overrides["/scan"] = keep;
+  const auto loaded = c.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+
+  Listener ls("det_listener");
+  Heard h;
+  auto scan_sub = ls.node->create_subscription<sensor_msgs::msg::LaserScan>(
+      "scan", cairn::QoS{}.keep_last(1000).reliable().transient_local(), [&](const sensor_msgs::msg::LaserScan& m) {
+        std::lock_guard l(h.mu);
+        h.scans.push_back(m);
+      });
+  ls.start();
+  constexpr std::size_t kScans = 30;
+  ASSERT_TRUE(waitFor([&] { return sizeOf(h, h.scans) >= kScans; }, 60s));
+
+  cairn::sim::SimConfig cfg;
+  cfg.seed = 5;
+  auto world = cairn::sim::loadWorld(cairn::sim::resolveWorldPath("office"));
+  const auto route = world.routes.at("corridor_patrol");
+  cairn::sim::Simulator core(std::move(world), cfg);
+  core.followRoute(route, cairn::sim::RouteConfig{.loop = true});
+  cairn::sim::SimOutput out;
+  core.advance(static_cast<double>(kScans) / cfg.laser.rate, out);
+  ASSERT_GE(out.scans.size(), kScans);
+
+  std::lock_guard l(h.mu);
+  for (std::size_t i = 0; i < kScans; ++i) {
+    const auto& got = h.scans[i];
+    const auto& want = out.scans[i];
+    EXPECT_NEAR(seconds(got.header.stamp), want.stamp, 1e-9) << "scan " << i;
+    ASSERT_EQ(got.ranges.size(), want.ranges.size());
+    EXPECT_TRUE(got.ranges == want.ranges) << "scan " << i << " differs from the core's";
+    EXPECT_TRUE(got.intensities == want.intensities) << "scan " << i;
+  }
 }
 
 TEST(LogPlayerComponent, PlaysTheAcesExcerptWithTheLogTimestamps) {
