@@ -122,6 +122,7 @@ class PeopleTracker : public cairn::Node {
     sp.max_gap_beams = static_cast<int>(declare_parameter<int64_t>("segmentation.max_gap_beams", sp.max_gap_beams, D{"invalid beams tolerated inside a cluster", 0.0, 20.0, true}));
     sp.min_points = static_cast<std::size_t>(declare_parameter<int64_t>("segmentation.min_points", static_cast<int64_t>(sp.min_points), D{"smallest cluster", 1.0, 1000.0, true}));
     sp.max_points = static_cast<std::size_t>(declare_parameter<int64_t>("segmentation.max_points", static_cast<int64_t>(sp.max_points), D{"largest cluster", 1.0, 100000.0, true}));
+    sp.jump_cap = declare_parameter<double>("segmentation.jump_cap", sp.jump_cap, D{"m, neighbour jump when there is no neighbour", 0.0, 100.0, true});
     dp.min_leg_confidence = declare_parameter<double>("detector.min_leg_confidence", dp.min_leg_confidence, D{"classifier score to accept a leg", 0.0, 1.0, true});
     dp.max_range = declare_parameter<double>("detector.max_range", dp.max_range, D{"m, clusters beyond are ignored", 0.1, 100.0, true});
     dp.max_leg_width = declare_parameter<double>("detector.max_leg_width", dp.max_leg_width, D{"m, wider clusters are not legs", 0.01, 2.0, true});
@@ -151,6 +152,9 @@ class PeopleTracker : public cairn::Node {
     tp.max_dt = declare_parameter<double>("tracker.max_dt", tp.max_dt, D{"s, larger forward time jumps reset the tracker", 0.01, 3600.0, true});
     tp.detection_probability = declare_parameter<double>("tracker.detection_probability", tp.detection_probability, D{"JPDA P_D", 0.01, 1.0, true});
     tp.clutter_density = declare_parameter<double>("tracker.clutter_density", tp.clutter_density, D{"JPDA false detections per m^2", 1e-9, 100.0, true});
+    tp.jpda_max_events = static_cast<int>(declare_parameter<int64_t>("tracker.jpda_max_events", tp.jpda_max_events, D{"larger JPDA gating clusters fall back to GNN", 1.0, 1e7, true}));
+    tp.min_detection_confidence = declare_parameter<double>("tracker.min_detection_confidence", tp.min_detection_confidence, D{"detections below are not used", 0.0, 1.0, true});
+    tp.confidence_gain = declare_parameter<double>("tracker.confidence_gain", tp.confidence_gain, D{"track confidence moving-average gain", 0.0, 1.0, true});
 
     // Guide (guide.hpp; Yuan §2.2.1).
     pt::GuideParams gp;

@@ -68,6 +68,22 @@ bool waitFor(const std::function<bool()>& pred, std::chrono::milliseconds timeou
   return true;
 }
 
+// Spins an executor on its own thread; stop() (or the destructor) cancels and joins.
+class Spinner {
+ public:
+  explicit Spinner(cairn::Executor& e) : exec_(e), thread_([this] { exec_.spin(); }) {}
+  ~Spinner() { stop(); }
+  void stop() {
+    if (!thread_.joinable()) return;
+    exec_.cancel();
+    thread_.join();
+  }
+
+ private:
+  cairn::Executor& exec_;
+  std::thread thread_;
+};
+
 // Two walkers and a robot driving forward while turning slowly; world frame == odometry frame.
 struct World {
   pt::WalkerState a, b;
@@ -148,7 +164,7 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
   req.parameters["mask.people"] = std::string("guide");
   const auto loaded = mgr.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
-  std::thread spinner([&] { exec.spin(); });
+  Spinner spinner(exec);
 
   // The "robot" publishing scans and odometry from another context: everything goes over DDS.
   auto sim_ctx = cairn::Context::create();
@@ -174,7 +190,7 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
     heard.masked[key(m.header.stamp)] = m;
   });
   auto follow = sim.create_client<psrv::Follow_Request, psrv::Follow_Response>("people/follow");
-  std::thread sim_spinner([&] { sim_exec.spin(); });
+  Spinner sim_spinner(sim_exec);
   ASSERT_TRUE(waitFor([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s))
       << "the component's subscriptions were not discovered";
 
@@ -213,6 +229,8 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
     }
   }
   EXPECT_LE(lost, 5) << "scans without a tracks message";
+  sim_spinner.stop();  // no more callbacks: `heard` is ours
+  spinner.stop();
 
   std::lock_guard l(heard.mu);
   // After a warm-up of 15 scans: each person is matched by exactly one track within 0.35 m in most scans, the
@@ -284,10 +302,6 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
   }
   EXPECT_GE(checked, 10);
 
-  sim_exec.cancel();
-  sim_spinner.join();
-  exec.cancel();
-  spinner.join();
 }
 
 TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning) {
@@ -299,7 +313,7 @@ TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning
   req.parameters["use_odom"] = false;  // tracks in the laser frame
   const auto loaded = mgr.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
-  std::thread spinner([&] { exec.spin(); });
+  Spinner spinner(exec);
 
   auto sim_ctx = cairn::Context::create();
   cairn::Executor sim_exec;
@@ -314,7 +328,7 @@ TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning
     std::lock_guard l(heard.mu);
     heard.tracks[key(m.header.stamp)] = m;
   });
-  std::thread sim_spinner([&] { sim_exec.spin(); });
+  Spinner sim_spinner(sim_exec);
   ASSERT_TRUE(waitFor([&] { return scan_pub->inter_process_subscription_count() > 0; }, 20s));
   auto received = [&](double t) {
     std::lock_guard l(heard.mu);
@@ -365,6 +379,8 @@ TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning
   ASSERT_TRUE(waitFor([&] { return received(back); }, 10s)) << "scan after time went backwards not processed";
   scan_pub->publish(good(back + dt));
   ASSERT_TRUE(waitFor([&] { return received(back + dt); }, 10s));
+  sim_spinner.stop();
+  spinner.stop();
 
   std::lock_guard l(heard.mu);
   // One reliable writer keeps its order: a bad scan that produced output would have arrived before `holes`.
@@ -373,10 +389,6 @@ TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning
   EXPECT_EQ(heard.tracks.at(key(stampOf(back))).header.frame_id, "laser");
   EXPECT_TRUE(heard.tracks.at(key(stampOf(back))).tracks.empty()) << "a reset tracker has no confirmed tracks";
 
-  sim_exec.cancel();
-  sim_spinner.join();
-  exec.cancel();
-  spinner.join();
 }
 
 namespace {
@@ -406,6 +418,10 @@ TEST(PeopleTrackerComponent, LaunchSpecValidatesItsParameters) {
   EXPECT_EQ(e.rfind("people.yaml:5:", 0), 0u) << e;
   e = launchError("{segmentation.min_points: 2.5}");
   EXPECT_NE(e.find("segmentation.min_points"), std::string::npos) << e;
+  e = launchError("{tracker.jpda_max_events: 0}");
+  EXPECT_NE(e.find("tracker.jpda_max_events"), std::string::npos) << e;
+  e = launchError("{use_odom: 1}");
+  EXPECT_NE(e.find("parameter 'use_odom' expects bool"), std::string::npos) << e;
   e = launchError("{tracker.association: kalman}");
   EXPECT_NE(e.find("'tracker.association' must be gnn or jpda, got 'kalman'"), std::string::npos) << e;
   e = launchError("{model_file: no_such_model.yml}");
