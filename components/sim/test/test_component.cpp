@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <thread>
 #include <unistd.h>
@@ -247,6 +248,7 @@ TEST(SimulatorComponent, DrivesItsRoutePublishesPeopleAndDrivesSimTimeNodes) {
   req.parameters["real_time_factor"] = 10.0;
   req.parameters["laser.fov_deg"] = 180.0;
   req.parameters["laser.resolution_deg"] = 1.0;
+  req.parameters["publish_map_tf"] = true;
   const auto loaded = c.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
 
@@ -264,6 +266,10 @@ TEST(SimulatorComponent, DrivesItsRoutePublishesPeopleAndDrivesSimTimeNodes) {
   auto people_sub = n.create_subscription<cairn_sim_msgs::msg::PersonArray>("people/ground_truth", cairn::QoS{}.keep_last(100), [&](const cairn_sim_msgs::msg::PersonArray& m) {
     std::lock_guard l(h.mu);
     h.people.push_back(m);
+  });
+  auto tf_sub = n.create_subscription<tf2_msgs::msg::TFMessage>("/tf", cairn::QoS{}.keep_last(100), [&](const tf2_msgs::msg::TFMessage& m) {
+    std::lock_guard l(h.mu);
+    for (const auto& t : m.transforms) h.tf.push_back(t);
   });
   ls.start();
 
@@ -300,6 +306,27 @@ TEST(SimulatorComponent, DrivesItsRoutePublishesPeopleAndDrivesSimTimeNodes) {
     }
   }
   EXPECT_GE(checked, 5);
+
+  // publish_map_tf: map -> odom ⊕ odom -> base_link is the ground-truth pose at the same stamp.
+  std::map<int64_t, geometry_msgs::msg::TransformStamped> map_odom, odom_base;
+  for (const auto& t : h.tf) (t.header.frame_id == "map" ? map_odom : odom_base)[nanos(t.header.stamp)] = t;
+  int composed = 0;
+  for (const auto& g : h.truth) {
+    const auto a = map_odom.find(nanos(g.header.stamp));
+    const auto b = odom_base.find(nanos(g.header.stamp));
+    if (a == map_odom.end() || b == odom_base.end()) continue;
+    EXPECT_EQ(a->second.child_frame_id, "odom");
+    const double ya = yawOf(a->second.transform.rotation), yb = yawOf(b->second.transform.rotation);
+    const auto& ta = a->second.transform.translation;
+    const auto& tb = b->second.transform.translation;
+    const double x = ta.x + std::cos(ya) * tb.x - std::sin(ya) * tb.y;
+    const double y = ta.y + std::sin(ya) * tb.x + std::cos(ya) * tb.y;
+    EXPECT_NEAR(x, g.pose.pose.position.x, 1e-9);
+    EXPECT_NEAR(y, g.pose.pose.position.y, 1e-9);
+    EXPECT_NEAR(std::remainder(ya + yb - yawOf(g.pose.pose.orientation), 2 * M_PI), 0.0, 1e-9);
+    ++composed;
+  }
+  EXPECT_GT(composed, 20);
   std::filesystem::remove_all(dir);
 }
 
