@@ -1,0 +1,310 @@
+// cairn_bt::ExecutiveNode in a container, driven over DDS from a node in another context: the tree waits for a
+// message (WaitForMessage with `equals`), pauses on an executor timer (Wait), publishes what it received
+// (PublishString); bt/status (latched) must reach SUCCESS, bt/events must carry the transitions, and the command
+// service must start, switch, load and stop trees (refusing bad files with the loader's file:line). Also: launch
+// validation rejects a bad tree_file with a clear one-line error.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <vector>
+
+#include "cairn/bt_executive/executive.hpp"
+#include "cairn/container.hpp"
+#include "cairn/launch.hpp"
+#include "cairn_bt_msgs/msg/TreeEvent.hpp"
+#include "cairn_bt_msgs/msg/TreeStatus.hpp"
+#include "cairn_bt_msgs/srv/ExecutiveCommand.hpp"
+#include "std_msgs/msg/String.hpp"
+
+using namespace std::chrono_literals;
+namespace bmsg = cairn_bt_msgs::msg;
+namespace bsrv = cairn_bt_msgs::srv;
+using Cmd = bsrv::ExecutiveCommand_Request;
+namespace C = cairn_bt_msgs::srv::ExecutiveCommand_Request_Constants;
+namespace S = cairn_bt_msgs::msg::NodeStatus_Constants;
+namespace TS = cairn_bt_msgs::msg::TreeStatus_Constants;
+
+namespace {
+
+const std::string kData = CAIRN_BT_TEST_DATA;
+
+struct Heard {
+  std::mutex mu;
+  std::optional<bmsg::TreeStatus> status;
+  std::vector<bmsg::TreeEvent> events;
+  std::vector<std::string> done;
+
+  std::optional<bmsg::TreeStatus> lastStatus() {
+    std::lock_guard l(mu);
+    return status;
+  }
+};
+
+std::optional<uint8_t> nodeStatus(const bmsg::TreeStatus& s, const std::string& path) {
+  for (const auto& n : s.nodes)
+    if (n.path == path) return n.status;
+  return std::nullopt;
+}
+
+// The driver: a node in its own context (so everything crosses DDS) with its own executor.
+struct Driver {
+  std::shared_ptr<cairn::Context> ctx = cairn::Context::create();
+  cairn::Executor exec;
+  std::unique_ptr<cairn::Node> node;
+  Heard heard;
+  std::shared_ptr<cairn::Subscription<bmsg::TreeStatus>> status_sub;
+  std::shared_ptr<cairn::Subscription<bmsg::TreeEvent>> event_sub;
+  std::shared_ptr<cairn::Subscription<std_msgs::msg::String>> done_sub;
+  std::shared_ptr<cairn::Publisher<std_msgs::msg::String>> go_pub;
+  std::shared_ptr<cairn::Client<Cmd, bsrv::ExecutiveCommand_Response>> client;
+
+  Driver() {
+    cairn::NodeOptions o("bt_driver", &exec);
+    o.context = ctx;
+    o.start_parameter_services = false;
+    node = std::make_unique<cairn::Node>(o);
+    status_sub = node->create_subscription<bmsg::TreeStatus>("/bt/status", cairn::QoS::latched(),
+                                                             [this](const bmsg::TreeStatus& s) {
+                                                               std::lock_guard l(heard.mu);
+                                                               heard.status = s;
+                                                             });
+    event_sub = node->create_subscription<bmsg::TreeEvent>("/bt/events", cairn::QoS{}.keep_last(1000),
+                                                           [this](const bmsg::TreeEvent& e) {
+                                                             std::lock_guard l(heard.mu);
+                                                             heard.events.push_back(e);
+                                                           });
+    done_sub = node->create_subscription<std_msgs::msg::String>("/bt_test/done", cairn::QoS{},
+                                                                [this](const std_msgs::msg::String& m) {
+                                                                  std::lock_guard l(heard.mu);
+                                                                  heard.done.push_back(m.data);
+                                                                });
+    go_pub = node->create_publisher<std_msgs::msg::String>("/bt_test/go", cairn::QoS{});
+    client = node->create_client<Cmd, bsrv::ExecutiveCommand_Response>("/executive/command");
+  }
+
+  bsrv::ExecutiveCommand_Response command(uint8_t c, std::string tree_id = {}, std::string file = {}) {
+    Cmd req;
+    req.command = c;
+    req.tree_id = std::move(tree_id);
+    req.file = std::move(file);
+    auto r = client->call(req, 20s);
+    if (!r) ADD_FAILURE() << "no reply to command " << int(c);
+    return r.value_or(bsrv::ExecutiveCommand_Response{});
+  }
+
+  bool waitStatus(const std::function<bool(const bmsg::TreeStatus&)>& pred, std::chrono::nanoseconds timeout = 30s) {
+    return exec.spin_until(
+        [&] {
+          auto s = heard.lastStatus();
+          return s && pred(*s);
+        },
+        timeout);
+  }
+};
+
+// The executive in a container of its own context, spun by two threads.
+struct Container {
+  std::shared_ptr<cairn::Context> ctx = cairn::Context::create();
+  cairn::Executor exec{cairn::Executor::Options{2}};
+  cairn::ComponentLoader loader;
+  cairn::ComponentManager mgr{ctx, exec, "bt_container", loader};
+  std::thread spinner;
+
+  cairn::LoadResult load(const std::string& tree_file, bool autostart) {
+    cairn::LoadRequest req{"cairn_bt::ExecutiveNode", "executive"};
+    req.parameters["tree_file"] = tree_file;
+    req.parameters["tick_rate_hz"] = 20.0;
+    req.parameters["autostart"] = autostart;
+    auto r = mgr.load(req);
+    spinner = std::thread([this] { exec.spin(); });
+    return r;
+  }
+  ~Container() {
+    exec.cancel();
+    if (spinner.joinable()) spinner.join();
+  }
+};
+
+}  // namespace
+
+TEST(BtComponent, TreeRunsOverDdsAndObeysCommands) {
+  Container c;
+  const auto loaded = c.load(kData + "/component_tree.xml", /*autostart=*/false);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  Driver d;
+
+  // Latched status of the loaded, not yet started tree.
+  ASSERT_TRUE(d.waitStatus([](const bmsg::TreeStatus& s) { return s.state == TS::STATE_READY; }));
+  EXPECT_EQ(d.heard.lastStatus()->tree_id, "Main");
+  EXPECT_EQ(d.heard.lastStatus()->tick_count, 0u);
+  // Before starting: the event stream and the awaited topic are matched across the two contexts.
+  ASSERT_TRUE(d.exec.spin_until(
+      [&] { return d.event_sub->publisher_count_inter_process() > 0 && d.go_pub->subscription_count() > 0; }, 30s));
+
+  auto r = d.command(C::START);
+  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_TRUE(d.waitStatus([](const bmsg::TreeStatus& s) {
+    return nodeStatus(s, "main/await_go") == S::RUNNING;
+  })) << "the tree must be waiting for bt_test/go";
+
+  // Every 20 ms a message that must be ignored ("nope") and then the awaited one ("go").
+  auto go_timer = d.node->create_wall_timer(20ms, [&] {
+    std_msgs::msg::String m;
+    m.data = "nope";
+    d.go_pub->publish(m);
+    m.data = "go";
+    d.go_pub->publish(m);
+  });
+  ASSERT_TRUE(d.waitStatus([](const bmsg::TreeStatus& s) { return s.state == TS::STATE_FINISHED; }));
+  go_timer->cancel();
+  auto s = *d.heard.lastStatus();
+  EXPECT_EQ(s.status, S::SUCCESS);
+  EXPECT_EQ(nodeStatus(s, "main"), S::SUCCESS);
+  EXPECT_EQ(nodeStatus(s, "main/await_go"), S::IDLE) << "a completed Sequence resets its children (BT.CPP)";
+  EXPECT_GT(s.tick_count, 0u);
+  const auto snap = cairn::bt::parseStatusJson(s.status_json);
+  EXPECT_EQ(snap.state, "finished");
+  EXPECT_EQ(snap.tree, "Main");
+
+  // The output port carried the message that matched `equals` to PublishString.
+  ASSERT_TRUE(d.exec.spin_until(
+      [&] {
+        std::lock_guard l(d.heard.mu);
+        return !d.heard.done.empty();
+      },
+      10s));
+  {
+    std::lock_guard l(d.heard.mu);
+    EXPECT_EQ(d.heard.done.front(), "go");
+  }
+  // Transitions arrive in order: await_go IDLE -> RUNNING -> SUCCESS -> IDLE (reset by the completed Sequence),
+  // and the Wait ran on its timer the same way.
+  ASSERT_TRUE(d.exec.spin_until(
+      [&] {
+        std::lock_guard l(d.heard.mu);
+        for (const auto& e : d.heard.events)
+          if (e.path == "main" && e.to_status == S::SUCCESS) return true;
+        return false;
+      },
+      10s));
+  {
+    std::lock_guard l(d.heard.mu);
+    std::vector<std::pair<uint8_t, uint8_t>> await_go, pause;
+    for (const auto& e : d.heard.events) {
+      EXPECT_EQ(e.tree_id, "Main");
+      if (e.path == "main/await_go") await_go.emplace_back(e.from_status, e.to_status);
+      if (e.path == "main/pause") pause.emplace_back(e.from_status, e.to_status);
+    }
+    const std::vector<std::pair<uint8_t, uint8_t>> expected = {
+        {S::IDLE, S::RUNNING}, {S::RUNNING, S::SUCCESS}, {S::SUCCESS, S::IDLE}};
+    EXPECT_EQ(await_go, expected);
+    EXPECT_EQ(pause, expected);
+  }
+
+  // Switch to a tree whose WaitForMessage times out (nobody publishes bt_test/never): FAILURE.
+  r = d.command(C::SWITCH_TREE, "TimesOut");
+  ASSERT_TRUE(r.success) << r.message;
+  EXPECT_EQ(r.state, "ready");
+  r = d.command(C::START);
+  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_TRUE(d.waitStatus([](const bmsg::TreeStatus& s) {
+    return s.tree_id == "TimesOut" && s.state == TS::STATE_FINISHED;
+  }));
+  EXPECT_EQ(d.heard.lastStatus()->status, S::FAILURE);
+  EXPECT_EQ(nodeStatus(*d.heard.lastStatus(), "timeout_tree"), S::FAILURE);
+
+  // Bad loads are refused with the reason; the current tree stays.
+  r = d.command(C::LOAD, "", kData + "/no_such_tree.xml");
+  EXPECT_FALSE(r.success);
+  EXPECT_NE(r.message.find("no_such_tree.xml' not found"), std::string::npos) << r.message;
+  EXPECT_EQ(r.state, "finished");
+  r = d.command(C::LOAD, "", kData + "/component_unknown_node.xml");
+  EXPECT_FALSE(r.success);
+  EXPECT_NE(r.message.find("component_unknown_node.xml:5"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("unsupported message type 'std_msgs/NoSuchType'"), std::string::npos) << r.message;
+  r = d.command(C::SWITCH_TREE, "NoSuchTree");
+  EXPECT_FALSE(r.success);
+  r = d.command(42);
+  EXPECT_FALSE(r.success);
+  EXPECT_NE(r.message.find("unknown command 42"), std::string::npos) << r.message;
+
+  // Reload the main tree, start it and stop it while it waits: the wait is halted and the state is stopped.
+  r = d.command(C::LOAD, "Main", kData + "/component_tree.xml");
+  ASSERT_TRUE(r.success) << r.message;
+  r = d.command(C::START);
+  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_TRUE(d.waitStatus([](const bmsg::TreeStatus& s) {
+    return s.tree_id == "Main" && nodeStatus(s, "main/await_go") == S::RUNNING;
+  }));
+  r = d.command(C::STOP);
+  ASSERT_TRUE(r.success) << r.message;
+  EXPECT_EQ(r.state, "stopped");
+  ASSERT_TRUE(d.waitStatus([](const bmsg::TreeStatus& s) { return s.state == TS::STATE_STOPPED; }));
+  EXPECT_EQ(nodeStatus(*d.heard.lastStatus(), "main/await_go"), S::IDLE);
+}
+
+TEST(BtComponent, AutostartRunsTheTreeFromTheParameter) {
+  Container c;
+  const auto loaded = c.load(kData + "/component_tree.xml", /*autostart=*/true);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  Driver d;
+  ASSERT_TRUE(d.waitStatus([](const bmsg::TreeStatus& s) {
+    return s.state == TS::STATE_RUNNING && nodeStatus(s, "main/await_go") == S::RUNNING;
+  }));
+  auto go_timer = d.node->create_wall_timer(20ms, [&] {
+    std_msgs::msg::String m;
+    m.data = "go";
+    d.go_pub->publish(m);
+  });
+  ASSERT_TRUE(d.waitStatus([](const bmsg::TreeStatus& s) { return s.state == TS::STATE_FINISHED; }));
+  go_timer->cancel();
+  EXPECT_EQ(d.heard.lastStatus()->status, S::SUCCESS);
+}
+
+// ------------------------------------------------------------------------------------------------ launch validation
+namespace {
+std::string launchError(const std::string& params) {
+  cairn::ComponentLoader loader;
+  try {
+    auto spec = cairn::parse_launch_spec_text(
+        "containers:\n  - name: c\n    components:\n      - class: cairn_bt::ExecutiveNode\n        name: executive\n"
+        "        params: " + params + "\n",
+        "spec.yaml");
+    cairn::validate_launch_spec(spec, loader);
+  } catch (const cairn::LaunchError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(BtComponentLaunch, ValidTreeFilePasses) {
+  EXPECT_EQ(launchError("{tree_file: " + kData + "/component_tree.xml, tick_rate_hz: 50}"), "");
+}
+
+TEST(BtComponentLaunch, ShippedDemoTreeResolvesByName) {
+  // A relative tree_file falls back to the package's trees/ (the demo launch spec uses this one).
+  EXPECT_EQ(launchError("{tree_file: demo_chatter.xml}"), "");
+}
+
+TEST(BtComponentLaunch, MissingTreeFileFailsValidation) {
+  const auto e = launchError("{tree_file: /nonexistent/tree.xml}");
+  EXPECT_EQ(e, "spec.yaml:4: cairn_bt::ExecutiveNode (/executive) cannot be constructed: tree_file "
+               "'/nonexistent/tree.xml' not found (tried /nonexistent/tree.xml)");
+}
+
+TEST(BtComponentLaunch, TreeThatDoesNotLoadFailsValidationWithFileAndLine) {
+  const auto e = launchError("{tree_file: " + kData + "/component_unknown_node.xml}");
+  EXPECT_NE(e.find("spec.yaml:4: cairn_bt::ExecutiveNode (/executive) cannot be constructed: tree_file: "), std::string::npos)
+      << e;
+  EXPECT_NE(e.find("component_unknown_node.xml:5"), std::string::npos) << e;
+  EXPECT_NE(e.find("unsupported message type 'std_msgs/NoSuchType'"), std::string::npos) << e;
+}
+
+TEST(BtComponentLaunch, TickRateOutOfRangeFailsValidation) {
+  const auto e = launchError("{tick_rate_hz: 0.0}");
+  EXPECT_NE(e.find("tick_rate_hz"), std::string::npos) << e;
+}
