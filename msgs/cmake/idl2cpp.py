@@ -48,9 +48,9 @@ def tokenize(text, path):
             toks.append(('pp', text[i:j].strip(), line))
             i = j
         elif c.isalnum() or c == '_' or (c in '-.' and i + 1 < n and text[i + 1].isdigit()):
-            j = i
+            j = i + 1 if c in '-.' else i  # a leading sign or dot belongs to the number
             while j < n and (text[j].isalnum() or text[j] in '_.:' or
-                             (text[j] in '-+' and j > i and text[j - 1] in 'eE' and text[i].isdigit())):
+                             (text[j] in '-+' and j > i and text[j - 1] in 'eE' and (text[i].isdigit() or text[i] in '-.'))):
                 if text[j] == ':' and not text.startswith('::', j):
                     break
                 j += 2 if text.startswith('::', j) else 1
