@@ -220,9 +220,11 @@ class Simulator : public cairn::Node {
       target = sim_->time() + cap;
     }
     for (;;) {
-      const double chunk_end = std::min(target, next_people_);
-      const long steps = static_cast<long>(std::floor((chunk_end - sim_->time()) / dt + 1e-6));
-      if (steps <= 0) break;
+      const long target_steps = static_cast<long>(std::floor((target - sim_->time()) / dt + 1e-6));
+      if (target_steps <= 0) break;
+      // up to the first step at or after the next people publication time (at least one step)
+      const long people_steps = std::max(1L, static_cast<long>(std::ceil((next_people_ - sim_->time()) / dt - 1e-6)));
+      const long steps = std::min(target_steps, people_steps);
       out_.scans.clear();
       out_.odometry.clear();
       out_.ground_truth.clear();
@@ -271,8 +273,12 @@ class Simulator : public cairn::Node {
       m.people.push_back(s);
     }
     people_pub_->publish(std::move(m));
-    ++people_count_;
-    next_people_ = sim0_people_ + static_cast<double>(people_count_) / people_rate_;
+    // Next due time after now (with people.rate above the physics rate: once per step).
+    const double half_step = 0.5 * sim_->config().physics_dt;
+    do {
+      ++people_count_;
+      next_people_ = static_cast<double>(people_count_) / people_rate_;
+    } while (next_people_ <= sim_->time() + half_step);
   }
 
   std::unique_ptr<sim::Simulator> sim_;
@@ -283,7 +289,7 @@ class Simulator : public cairn::Node {
   bool warned_route_ = false, warned_lag_ = false;
   bool started_ = false;
   std::chrono::steady_clock::time_point wall0_;
-  double sim0_ = 0.0, sim0_people_ = 0.0, next_people_ = 0.0;
+  double sim0_ = 0.0, next_people_ = 0.0;
   long people_count_ = 0;
   std::chrono::nanoseconds period_{10000000};
   std::shared_ptr<cairn::CallbackGroup> group_;
