@@ -502,7 +502,8 @@ class ExecutiveNode : public cairn::Node {
     registerRuntimeNode<Wait>(factory_, "Wait", "waits `msec` on the node clock (executor one-shot timer)", hub_);
 
     status_pub_ = create_publisher<bmsg::TreeStatus>("bt/status", cairn::QoS::latched());
-    event_pub_ = create_publisher<bmsg::TreeEvent>("bt/events", cairn::QoS{}.keep_last(1000));
+    // transient local: a late watcher (or one still in discovery) gets the last 1000 transitions
+    event_pub_ = create_publisher<bmsg::TreeEvent>("bt/events", cairn::QoS{}.keep_last(1000).transient_local());
 
     if (!file.empty()) {
       const std::string path = resolveTreeFile(file);  // throws: launch validation reports it

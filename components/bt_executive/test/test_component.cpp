@@ -17,6 +17,7 @@
 #include "cairn_bt_msgs/msg/TreeEvent.hpp"
 #include "cairn_bt_msgs/msg/TreeStatus.hpp"
 #include "cairn_bt_msgs/srv/ExecutiveCommand.hpp"
+#include "rosgraph_msgs/msg/Clock.hpp"
 #include "std_msgs/msg/String.hpp"
 
 using namespace std::chrono_literals;
@@ -71,7 +72,7 @@ struct Driver {
                                                                std::lock_guard l(heard.mu);
                                                                heard.status = s;
                                                              });
-    event_sub = node->create_subscription<bmsg::TreeEvent>("/bt/events", cairn::QoS{}.keep_last(1000),
+    event_sub = node->create_subscription<bmsg::TreeEvent>("/bt/events", cairn::QoS{}.keep_last(1000).transient_local(),
                                                            [this](const bmsg::TreeEvent& e) {
                                                              std::lock_guard l(heard.mu);
                                                              heard.events.push_back(e);
@@ -113,9 +114,10 @@ struct Container {
   cairn::ComponentManager mgr{ctx, exec, "bt_container", loader};
   std::thread spinner;
 
-  cairn::LoadResult load(const std::string& tree_file, bool autostart) {
+  cairn::LoadResult load(const std::string& tree_file, bool autostart, bool use_sim_time = false) {
     cairn::LoadRequest req{"cairn_bt::ExecutiveNode", "executive"};
     req.parameters["tree_file"] = tree_file;
+    req.parameters["use_sim_time"] = use_sim_time;
     req.parameters["tick_rate_hz"] = 20.0;
     req.parameters["autostart"] = autostart;
     auto r = mgr.load(req);
@@ -262,6 +264,40 @@ TEST(BtComponent, AutostartRunsTheTreeFromTheParameter) {
   ASSERT_TRUE(d.waitStatus([](const bmsg::TreeStatus& s) { return s.state == TS::STATE_FINISHED; }));
   go_timer->cancel();
   EXPECT_EQ(d.heard.lastStatus()->status, S::SUCCESS);
+}
+
+TEST(BtComponent, TimersRunOnSimTime) {
+  // The tree's clock is the node clock: with use_sim_time a 10-minute Wait completes as soon as /clock passes its
+  // deadline. On the steady clock it would not complete within the test's 30 s wait.
+  Container c;
+  const auto loaded = c.load(kData + "/component_sim.xml", /*autostart=*/true, /*use_sim_time=*/true);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  Driver d;
+  ASSERT_TRUE(d.waitStatus([](const bmsg::TreeStatus& s) { return nodeStatus(s, "sim/long") == S::RUNNING; }));
+  const int32_t started_sec = d.heard.lastStatus()->stamp.sec;
+  EXPECT_LT(started_sec, 600) << "sim time starts at 0 until the first /clock";
+  auto clock_pub = d.node->create_publisher<rosgraph_msgs::msg::Clock>("/clock", cairn::QoS{});
+  auto clock_timer = d.node->create_wall_timer(20ms, [&] {
+    rosgraph_msgs::msg::Clock m;
+    m.clock.sec = 700;
+    clock_pub->publish(m);
+  });
+  ASSERT_TRUE(d.waitStatus([](const bmsg::TreeStatus& s) { return s.state == TS::STATE_FINISHED; }));
+  clock_timer->cancel();
+  const auto s = *d.heard.lastStatus();
+  EXPECT_EQ(s.status, S::SUCCESS);
+  EXPECT_EQ(s.stamp.sec, 700) << "status stamps are on the node clock";
+  // bt/events is another reader: its copy of the transition may arrive after the status.
+  std::optional<bmsg::TreeEvent> done;
+  ASSERT_TRUE(d.exec.spin_until(
+      [&] {
+        std::lock_guard l(d.heard.mu);
+        for (const auto& e : d.heard.events)
+          if (e.path == "sim/long" && e.to_status == S::SUCCESS) done = e;
+        return done.has_value();
+      },
+      10s));
+  EXPECT_EQ(done->stamp.sec, 700) << "the Wait completed at the sim time that passed its deadline";
 }
 
 // ------------------------------------------------------------------------------------------------ launch validation
