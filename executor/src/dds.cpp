@@ -39,13 +39,20 @@ DdsWriter::DdsWriter(Context& ctx, const std::string& dds_topic, const msgs::Typ
     : ts_(ts) {
   const int32_t topic = ctx.topic(dds_topic, ts);
   dds_qos_t* q = endpoint_qos(qos, opts);
-  writer_ = dds_create_writer(ctx.participant(), topic, q, nullptr);
+  dds_listener_t* l = dds_create_listener(&matched_);
+  dds_lset_publication_matched(l, [](dds_entity_t, const dds_publication_matched_status_t st, void* arg) {
+    static_cast<std::atomic<int>*>(arg)->store(static_cast<int>(st.current_count));
+  });
+  writer_ = dds_create_writer(ctx.participant(), topic, q, l);
+  dds_delete_listener(l);
   dds_delete_qos(q);
   if (writer_ < 0) {
     throw std::runtime_error("cannot create DDS writer on '" + dds_topic + "': " + dds_strretcode(writer_));
   }
   dds_guid_t g;
   if (dds_get_guid(writer_, &g) == DDS_RETCODE_OK) guid_ = to_gid(g);
+  dds_publication_matched_status_t st;  // readers matched before the listener was in place
+  if (dds_get_publication_matched_status(writer_, &st) == DDS_RETCODE_OK) matched_.store(int(st.current_count));
 }
 
 DdsWriter::~DdsWriter() {
@@ -69,15 +76,17 @@ void DdsWriter::write(const void* cpp, int64_t source_timestamp_ns) {
   }
 }
 
-int DdsWriter::matched() const {
-  dds_publication_matched_status_t st;
-  if (dds_get_publication_matched_status(writer_, &st) != DDS_RETCODE_OK) return 0;
-  return static_cast<int>(st.current_count);
-}
+
+struct DdsReader::Batch {
+  static constexpr int kSize = 32;
+  void* samples[kSize] = {};
+  dds_sample_info_t info[kSize];
+  int n = 0, next = 0;
+};
 
 DdsReader::DdsReader(Context& ctx, const std::string& dds_topic, const msgs::TypeSupport& ts, const QoS& qos,
                      const DdsEndpointOptions& opts, DataCallback on_data)
-    : ts_(ts), on_data_(std::move(on_data)) {
+    : batch_(std::make_unique<Batch>()), ts_(ts), on_data_(std::move(on_data)) {
   const int32_t topic = ctx.topic(dds_topic, ts);
   dds_qos_t* q = endpoint_qos(qos, opts);
   const dds_entity_t r = dds_create_reader(ctx.participant(), topic, q, nullptr);
@@ -100,7 +109,15 @@ DdsReader::DdsReader(Context& ctx, const std::string& dds_topic, const msgs::Typ
 }
 
 DdsReader::~DdsReader() {
-  if (reader_ > 0) dds_delete(reader_);  // returns once no listener call is in progress
+  if (reader_ > 0) {
+    return_batch();
+    dds_delete(reader_);  // returns once no listener call is in progress
+  }
+}
+
+void DdsReader::return_batch() {
+  if (batch_->n > 0) dds_return_loan(reader_, batch_->samples, batch_->n);
+  batch_->n = batch_->next = 0;
 }
 
 Gid DdsReader::publisher_gid(uint64_t handle) {
@@ -117,20 +134,24 @@ Gid DdsReader::publisher_gid(uint64_t handle) {
 
 bool DdsReader::take(void* cpp_out, MessageInfo& info) {
   for (;;) {
-    void* buf[1] = {nullptr};
-    dds_sample_info_t si;
-    const int n = dds_take(reader_, buf, &si, 1, 1);  // loaned sample: no allocation on our side
-    if (n <= 0) return false;
-    const bool valid = si.valid_data;
-    if (valid) {
-      ts_.from_c(buf[0], cpp_out);
-      info.source_timestamp_ns = si.source_timestamp;
-      info.publisher_gid = publisher_gid(si.publication_handle);
-      info.sequence_number = ++pubs_[si.publication_handle].second;
-      info.from_intra_process = false;
+    Batch& b = *batch_;
+    if (b.next == b.n) {
+      return_batch();
+      b.samples[0] = nullptr;  // loaned samples: no allocation on our side
+      const int n = dds_take(reader_, b.samples, b.info, Batch::kSize, Batch::kSize);
+      if (n <= 0) return false;
+      b.n = n;
     }
-    dds_return_loan(reader_, buf, n);
-    if (valid) return true;
+    const int i = b.next++;
+    const dds_sample_info_t& si = b.info[i];
+    if (!si.valid_data) continue;  // dispose/unregister notifications
+    ts_.from_c(b.samples[i], cpp_out);
+    info.source_timestamp_ns = si.source_timestamp;
+    info.publisher_gid = publisher_gid(si.publication_handle);
+    info.sequence_number = ++pubs_[si.publication_handle].second;
+    info.from_intra_process = false;
+    if (b.next == b.n) return_batch();  // give the loan back promptly
+    return true;
   }
 }
 

@@ -2,9 +2,11 @@
 #ifndef CAIRN_DDS_HPP
 #define CAIRN_DDS_HPP
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
 
@@ -33,8 +35,9 @@ class DdsWriter {
   DdsWriter& operator=(const DdsWriter&) = delete;
   /// Serializes `cpp` (a C++ message of the writer's type) and writes it. Throws on DDS errors.
   void write(const void* cpp, int64_t source_timestamp_ns);
-  /// Number of matched readers (in other processes when ignore_local).
-  int matched() const;
+  /// Number of matched readers (in other processes when ignore_local). Kept up to date by a
+  /// publication-matched listener, so asking costs an atomic load (it is asked on every publish).
+  int matched() const { return matched_.load(std::memory_order_relaxed); }
   Gid guid() const { return guid_; }
   int32_t entity() const { return writer_; }
 
@@ -42,6 +45,7 @@ class DdsWriter {
   const msgs::TypeSupport& ts_;
   int32_t writer_ = 0;
   Gid guid_{};
+  std::atomic<int> matched_{0};
 };
 
 class DdsReader {
@@ -55,11 +59,16 @@ class DdsReader {
   DdsReader(const DdsReader&) = delete;
   DdsReader& operator=(const DdsReader&) = delete;
   /// Takes the next valid sample into `cpp_out` (a C++ message of the reader's type); false if none.
+  /// Samples are taken from Cyclone in batches (one dds_take per kBatch samples), loaned, and converted
+  /// one at a time. Not thread-safe (one consumer at a time, as the subscription guarantees).
   bool take(void* cpp_out, MessageInfo& info);
   int matched() const;
   int32_t entity() const { return reader_; }
 
  private:
+  struct Batch;  // loaned samples of the last dds_take (src/dds.cpp)
+  std::unique_ptr<Batch> batch_;
+  void return_batch();
   Gid publisher_gid(uint64_t publication_handle);
   const msgs::TypeSupport& ts_;
   DataCallback on_data_;

@@ -58,8 +58,24 @@ class Publisher : public PublisherBase {
     }
     if (channel_) channel_->publish(std::move(msg), info, latch_);
   }
-  /// Publishes a copy of `msg` (one copy; prefer the unique_ptr overload).
-  void publish(const T& msg) { publish(std::make_unique<T>(msg)); }
+  /// Publishes `msg`: serialized from the reference for other processes; copied once only if a subscription
+  /// in this process wants it (prefer the unique_ptr overload when there are local subscribers).
+  void publish(const T& msg) {
+    if (latch_ > 0 || (channel_ && channel_->count() > 0)) {  // latched: kept for late local joiners
+      publish(std::make_unique<T>(msg));
+      return;
+    }
+    MessageInfo info;
+    info.source_timestamp_ns = clock_->now().ns;
+    ++seq_;
+    if (dds_ && (latch_ > 0 || dds_->matched() > 0)) {
+      try {
+        dds_->write(&msg, info.source_timestamp_ns);
+      } catch (const std::exception& e) {
+        CAIRN_ERROR(logger_, "publish on " << topic_ << ": " << e.what());
+      }
+    }
+  }
 
   std::size_t intra_process_subscription_count() const { return channel_ ? channel_->count() : 0; }
   std::size_t inter_process_subscription_count() const { return dds_ ? static_cast<std::size_t>(dds_->matched()) : 0; }
