@@ -140,6 +140,7 @@ TEST(Cli, InvalidSpecIsRejectedBeforeAnythingStarts) {
   r = run(kCairn + " launch /nonexistent.yaml");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.output, "cairn: /nonexistent.yaml:0: cannot read the file\n");
-  r = run(kCairn + " launch " + kSpecs + "/launch_specs/demo.yaml --check");
+  // the demo's relative paths (urdf/...) are relative to the repository root, where the README runs it
+  r = run("cd " + kSpecs + " && " + kCairn + " launch launch_specs/demo.yaml --check");
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }

@@ -18,7 +18,12 @@ std::string loopback_cyclone_config() {
 
 int configure_isolated_dds() {
   if (!std::getenv("CAIRN_KEEP_CYCLONEDDS_URI")) setenv("CYCLONEDDS_URI", loopback_cyclone_config().c_str(), 1);
-  if (const char* d = std::getenv("CAIRN_DOMAIN_ID")) return std::atoi(d);
+  // Always a fresh domain: an inherited CAIRN_DOMAIN_ID (a shell that sourced scripts/env.sh) would make
+  // parallel test processes see each other. CAIRN_TEST_DOMAIN_ID forces one for debugging.
+  if (const char* d = std::getenv("CAIRN_TEST_DOMAIN_ID")) {
+    setenv("CAIRN_DOMAIN_ID", d, 1);
+    return std::atoi(d);
+  }
   std::random_device rd;
   std::mt19937 rng(rd() ^ static_cast<unsigned>(getpid()));
   const int domain = 1 + static_cast<int>(rng() % 230);

@@ -69,14 +69,20 @@ class Service : public ServiceBase {
     QoS q = QoS::services();
     q.keep_all();
     writer_ = std::make_shared<DdsWriter>(ctx, detail::reply_topic(name_), msgs::type_support<Resp>(), q, opts);
-    reader_ = std::make_unique<DdsReader>(ctx, detail::request_topic(name_), msgs::type_support<Req>(), q, opts,
-                                          [weak, exec](DdsReader&) {
-                                            if (auto s = weak.lock()) exec->schedule(s);
-                                          });
+    auto reader = std::make_unique<DdsReader>(ctx, detail::request_topic(name_), msgs::type_support<Req>(), q, opts,
+                                              [weak, exec](DdsReader&) {
+                                                if (auto s = weak.lock()) exec->schedule(s);
+                                              });
+    {
+      std::lock_guard l(reader_mu_);
+      reader_ = std::move(reader);
+    }
+    exec->schedule(shared_from_this());  // requests that arrived before reader_ was set
   }
 
   void shutdown() override {
     disable();
+    std::lock_guard l(reader_mu_);
     reader_.reset();
     writer_.reset();
   }
@@ -86,7 +92,10 @@ class Service : public ServiceBase {
     for (;;) {
       Req req;
       MessageInfo info;
-      if (!reader_ || !reader_->take(&req, info)) return;
+      {
+        std::lock_guard l(reader_mu_);
+        if (!reader_ || !reader_->take(&req, info)) return;
+      }
       const auto header = req.request_header;
       const std::pair<uint64_t, int64_t> key{header.client_guid, header.sequence_number};
       {
@@ -158,6 +167,7 @@ class Service : public ServiceBase {
   Logger logger_;
   std::chrono::milliseconds reply_match_timeout_;
   std::shared_ptr<DdsWriter> writer_;
+  std::mutex reader_mu_;
   std::unique_ptr<DdsReader> reader_;
 };
 

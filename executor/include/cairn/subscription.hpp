@@ -87,12 +87,22 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
                                               // costs one queue entry, not one per sample
                                               if (!s->dds_pending_.exchange(true)) s->exec_->schedule(s);
                                             });
+      // The reader's first callbacks may have run before reader_ was set (and found nothing to drain):
+      // publish the pointer, then make sure whatever arrived meanwhile is drained.
+      reader_raw_.store(reader_.get(), std::memory_order_release);
+      if (immediate()) {
+        guarded([&] { drain_dds(); });
+      } else {
+        dds_pending_.store(true);
+        exec_->schedule(self);
+      }
     }
   }
 
   void shutdown() override {
     disable();
     if (channel_) channel_->remove(this);
+    reader_raw_.store(nullptr);
     reader_.reset();
   }
 
@@ -122,18 +132,18 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
       invoke(std::move(item));
       return;
     }
-    if (!reader_) return;
     // DDS leg: drain what has arrived; arrivals from now on schedule a new run
     dds_pending_.store(false);
     drain_dds();
   }
 
   void drain_dds() {
-    if (!reader_) return;
+    DdsReader* reader = reader_raw_.load(std::memory_order_acquire);
+    if (!reader) return;
     for (;;) {
       auto msg = std::make_unique<T>();
       MessageInfo info;
-      if (!reader_->take(msg.get(), info)) break;
+      if (!reader->take(msg.get(), info)) break;
       invoke(Item{std::move(msg), info});
     }
   }
@@ -214,6 +224,7 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
   std::deque<Item> queue_;
   uint64_t dropped_ = 0;
   std::atomic<bool> dds_pending_{false};
+  std::atomic<DdsReader*> reader_raw_{nullptr};  // what callbacks on other threads read
 };
 
 }  // namespace cairn

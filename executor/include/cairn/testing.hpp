@@ -9,7 +9,8 @@ namespace cairn::testing {
 /// CYCLONEDDS_URI XML: loopback interface only, no multicast, unicast discovery on 127.0.0.1.
 std::string loopback_cyclone_config();
 /// Sets CYCLONEDDS_URI (unless CAIRN_KEEP_CYCLONEDDS_URI is set) and CAIRN_DOMAIN_ID to a random domain in
-/// [1, 230] (unless already set), so parallel test processes do not see each other. Returns the domain.
+/// [1, 230] (or to $CAIRN_TEST_DOMAIN_ID), overriding an inherited CAIRN_DOMAIN_ID, so parallel test processes
+/// never see each other. Returns the domain.
 int configure_isolated_dds();
 
 }  // namespace cairn::testing
