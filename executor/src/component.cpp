@@ -1,4 +1,5 @@
 #include "cairn/component.hpp"
+#include "cairn/data_files.hpp"
 
 #include <dlfcn.h>
 #include <unistd.h>
@@ -35,24 +36,18 @@ std::vector<std::string> ComponentRegistry::names() const {
   return out;
 }
 
-namespace {
-void split_into(const char* env, std::vector<std::string>& out, const std::string& suffix) {
-  if (!env) return;
-  std::stringstream ss(env);
-  std::string item;
-  while (std::getline(ss, item, ':')) {
-    if (!item.empty()) out.push_back(item + suffix);
-  }
-}
-}  // namespace
-
 ComponentLoader::ComponentLoader() {
-  split_into(std::getenv("CAIRN_COMPONENT_PATH"), dirs_, "");
+  if (const char* env = std::getenv("CAIRN_COMPONENT_PATH")) {
+    std::stringstream ss(env);
+    std::string item;
+    while (std::getline(ss, item, ':')) {
+      if (!item.empty()) dirs_.push_back(item);
+    }
+  }
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (!ec) dirs_.push_back((exe.parent_path().parent_path() / "lib" / "cairn_components").string());
-  split_into(std::getenv("CMAKE_PREFIX_PATH"), dirs_, "/lib/cairn_components");
-  split_into(std::getenv("COLCON_PREFIX_PATH"), dirs_, "/lib/cairn_components");
+  for (const auto& d : prefix_paths("lib/cairn_components")) dirs_.push_back(d.string());
 }
 
 std::map<std::string, std::string> ComponentLoader::available() const {

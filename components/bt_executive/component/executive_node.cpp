@@ -24,6 +24,7 @@
 #include "cairn/bt_executive/factory.hpp"
 #include "cairn/bt_executive/xml_loader.hpp"
 #include "cairn/component.hpp"
+#include "cairn/data_files.hpp"
 #include "cairn/msgs/type_support.hpp"
 #include "cairn_bt_msgs/msg/TreeEvent.hpp"
 #include "cairn_bt_msgs/msg/TreeStatus.hpp"
@@ -86,25 +87,12 @@ std::string resolveTreeFile(const std::string& name) {
     candidates.push_back(p);
   } else {
     candidates.push_back(fs::current_path() / p);
-    for (const char* var : {"CMAKE_PREFIX_PATH", "COLCON_PREFIX_PATH"}) {
-      const char* v = std::getenv(var);
-      if (v == nullptr) continue;
-      std::stringstream ss(v);
-      std::string prefix;
-      while (std::getline(ss, prefix, ':'))
-        if (!prefix.empty()) candidates.push_back(fs::path(prefix) / "share/cairn_bt_executive/trees" / p);
-    }
+    for (const auto& dir : cairn::prefix_paths("share/cairn_bt_executive/trees")) candidates.push_back(dir / p);
 #ifdef CAIRN_BT_TREES_DIR
     candidates.push_back(fs::path(CAIRN_BT_TREES_DIR) / p);
 #endif
   }
-  for (const auto& c : candidates) {
-    std::error_code ec;
-    if (fs::is_regular_file(c, ec)) return c.string();
-  }
-  std::string tried;
-  for (const auto& c : candidates) tried += (tried.empty() ? "" : ", ") + c.string();
-  throw std::invalid_argument("tree_file '" + name + "' not found (tried " + tried + ")");
+  return cairn::first_existing_file(candidates, "tree_file '" + name + "'");
 }
 
 }  // namespace

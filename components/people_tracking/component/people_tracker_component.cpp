@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "cairn/component.hpp"
+#include "cairn/data_files.hpp"
 #include "cairn/people_tracking/classifier.hpp"
 #include "cairn/people_tracking/detector.hpp"
 #include "cairn/people_tracking/guide.hpp"
@@ -79,24 +80,11 @@ std::string resolveModelPath(const std::string& param) {
   if (!param.empty()) candidates.push_back(fs::current_path() / p);
   const fs::path lib = libraryDir();
   if (!lib.empty()) candidates.push_back(lib.parent_path().parent_path() / "share/cairn_people_tracking/models" / p);
-  for (const char* var : {"CMAKE_PREFIX_PATH", "COLCON_PREFIX_PATH"}) {
-    const char* v = std::getenv(var);
-    if (v == nullptr) continue;
-    std::stringstream ss(v);
-    std::string prefix;
-    while (std::getline(ss, prefix, ':'))
-      if (!prefix.empty()) candidates.push_back(fs::path(prefix) / "share/cairn_people_tracking/models" / p);
-  }
+  for (const auto& dir : cairn::prefix_paths("share/cairn_people_tracking/models")) candidates.push_back(dir / p);
 #ifdef CAIRN_PEOPLE_MODEL_DIR
   candidates.push_back(fs::path(CAIRN_PEOPLE_MODEL_DIR) / p);
 #endif
-  for (const auto& c : candidates) {
-    std::error_code ec;
-    if (fs::is_regular_file(c, ec)) return c.string();
-  }
-  std::string tried;
-  for (const auto& c : candidates) tried += (tried.empty() ? "" : ", ") + c.string();
-  throw std::invalid_argument("model_file: '" + name + "' not found (tried " + tried + ")");
+  return cairn::first_existing_file(candidates, "model_file: '" + name + "'");
 }
 
 }  // namespace
