@@ -155,7 +155,7 @@ class PeopleTracker : public cairn::Node {
     gp.reacquire_window = declare_parameter<double>("guide.reacquire_window", gp.reacquire_window, D{"s before Person Lost falls back to Search", 0.0, 3600.0, true});
 
     // Masking (masking.hpp; Yuan §3.2.1).
-    mask_mode_ = declare_parameter<std::string>("mask.people", "all", D{"whom scan_masked hides: all (published tracks) | guide (Yuan §3.2.1) | none", {}, {}, true});
+    mask_mode_ = declare_parameter<std::string>("mask.people", "all", D{"whom scan_filtered hides: all (published tracks) | guide (Yuan §3.2.1) | none", {}, {}, true});
     if (mask_mode_ != "all" && mask_mode_ != "guide" && mask_mode_ != "none")
       throw std::invalid_argument("parameter 'mask.people' must be all, guide or none, got '" + mask_mode_ + "'");
     mask_.leg_radius = declare_parameter<double>("mask.leg_radius", mask_.leg_radius, D{"m, added to half the leg separation", 0.0, 1.0, true});
@@ -178,7 +178,7 @@ class PeopleTracker : public cairn::Node {
     det_pub_ = create_publisher<pmsg::PersonDetections>("people/detections", cairn::QoS{});
     track_pub_ = create_publisher<pmsg::TrackedPersons>("people/tracks", cairn::QoS{});
     guide_pub_ = create_publisher<pmsg::GuideState>("people/guide", cairn::QoS{});
-    masked_pub_ = create_publisher<sensor_msgs::msg::LaserScan>("scan_masked", cairn::QoS::sensor_data());
+    masked_pub_ = create_publisher<sensor_msgs::msg::LaserScan>("scan_filtered", cairn::QoS::sensor_data());
     scan_sub_ = create_subscription<sensor_msgs::msg::LaserScan>(
         "scan", cairn::QoS::sensor_data(), [this](const sensor_msgs::msg::LaserScan& m) { onScan(m); });
     if (use_odom_)

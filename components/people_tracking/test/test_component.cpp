@@ -1,7 +1,7 @@
 // cairn_people_tracking::PeopleTracker in a container: synthetic scans of two walking people (the core's scene
 // generator, seeded) and odometry of a moving robot arrive over DDS from another context; tracks must come back
 // on people/tracks with stable ids at the people's positions in the odometry frame (robot motion compensated),
-// the follow service must select the guide, scan_masked must hide only the guide (mask.people: guide, Yuan
+// the follow service must select the guide, scan_filtered must hide only the guide (mask.people: guide, Yuan
 // §3.2.1), and malformed scans must be skipped without stopping the component. Also: launch-spec validation of
 // the component's parameters.
 #include <gtest/gtest.h>
@@ -185,7 +185,7 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
     std::lock_guard l(heard.mu);
     heard.guide[key(m.header.stamp)] = m;
   });
-  auto masked_sub = sim.create_subscription<sensor_msgs::msg::LaserScan>("scan_masked", cairn::QoS::sensor_data(), [&](const sensor_msgs::msg::LaserScan& m) {
+  auto masked_sub = sim.create_subscription<sensor_msgs::msg::LaserScan>("scan_filtered", cairn::QoS::sensor_data(), [&](const sensor_msgs::msg::LaserScan& m) {
     std::lock_guard l(heard.mu);
     heard.masked[key(m.header.stamp)] = m;
   });
@@ -278,7 +278,7 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
   }
   EXPECT_GE(tracking, 10);
 
-  // scan_masked (mask.people: guide): the beam towards A's centre is NaN, the beam towards B's is the raw return.
+  // scan_filtered (mask.people: guide): the beam towards A's centre is NaN, the beam towards B's is the raw return.
   int checked = 0;
   for (int k = select_at + 5; k < steps; ++k) {
     const double t = 100.0 + k * dt;
