@@ -9,16 +9,7 @@
 #include "cairn/launch.hpp"
 
 namespace {
-std::string error_of(const std::string& yaml) {
-  cairn::ComponentLoader loader;
-  try {
-    auto spec = cairn::parse_launch_spec_text(yaml, "spec.yaml");
-    cairn::validate_launch_spec(spec, loader);
-  } catch (const cairn::LaunchError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string error_of(const std::string& yaml) { return cairn::launch_spec_error(yaml, "spec.yaml"); }
 }  // namespace
 
 TEST(LaunchSpec, AValidSpecPasses) {

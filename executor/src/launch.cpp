@@ -256,6 +256,16 @@ LaunchSpec parse_launch_spec(const std::string& path) {
   return parse_launch_spec_text(ss.str(), path);
 }
 
+std::string launch_spec_error(const std::string& text, const std::string& file) {
+  ComponentLoader loader;
+  try {
+    validate_launch_spec(parse_launch_spec_text(text, file), loader);
+  } catch (const LaunchError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 void validate_launch_spec(const LaunchSpec& spec, ComponentLoader& loader) {
   struct End {
     EndpointRecord rec;

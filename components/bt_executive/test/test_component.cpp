@@ -303,17 +303,10 @@ TEST(BtComponent, TimersRunOnSimTime) {
 // ------------------------------------------------------------------------------------------------ launch validation
 namespace {
 std::string launchError(const std::string& params) {
-  cairn::ComponentLoader loader;
-  try {
-    auto spec = cairn::parse_launch_spec_text(
+  return cairn::launch_spec_error(
         "containers:\n  - name: c\n    components:\n      - class: cairn_bt::ExecutiveNode\n        name: executive\n"
         "        params: " + params + "\n",
-        "spec.yaml");
-    cairn::validate_launch_spec(spec, loader);
-  } catch (const cairn::LaunchError& e) {
-    return e.what();
-  }
-  return "";
+      "spec.yaml");
 }
 }  // namespace
 

@@ -362,17 +362,10 @@ TEST(CopaMapComponent, GridifiesOdometryAndTracksAndRetrainsInTheBackground) {
 
 namespace {
 std::string launchError(const std::string& params) {
-  cairn::ComponentLoader loader;
-  try {
-    auto spec = cairn::parse_launch_spec_text(
+  return cairn::launch_spec_error(
         "containers:\n  - name: c\n    components:\n      - class: cairn_copa::CopaMapNode\n"
         "        params: " + params + "\n",
-        "copa.yaml");
-    cairn::validate_launch_spec(spec, loader);
-  } catch (const cairn::LaunchError& e) {
-    return e.what();
-  }
-  return "";
+      "copa.yaml");
 }
 }  // namespace
 

@@ -393,17 +393,10 @@ TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning
 
 namespace {
 std::string launchError(const std::string& params) {
-  cairn::ComponentLoader loader;
-  try {
-    auto spec = cairn::parse_launch_spec_text(
+  return cairn::launch_spec_error(
         "containers:\n  - name: c\n    components:\n      - class: cairn_people_tracking::PeopleTracker\n"
         "        params: " + params + "\n",
-        "people.yaml");
-    cairn::validate_launch_spec(spec, loader);
-  } catch (const cairn::LaunchError& e) {
-    return e.what();
-  }
-  return "";
+      "people.yaml");
 }
 }  // namespace
 

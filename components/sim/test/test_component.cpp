@@ -483,16 +483,9 @@ TEST(LogPlayerComponent, BadLogsAreLoadErrorsNamingFileAndLine) {
 
 namespace {
 std::string launchError(const std::string& cls, const std::string& params) {
-  cairn::ComponentLoader loader;
-  try {
-    auto spec = cairn::parse_launch_spec_text(
+  return cairn::launch_spec_error(
         "containers:\n  - name: c\n    components:\n      - class: " + cls + "\n        params: " + params + "\n",
-        "sim.yaml");
-    cairn::validate_launch_spec(spec, loader);
-  } catch (const cairn::LaunchError& e) {
-    return e.what();
-  }
-  return "";
+      "sim.yaml");
 }
 }  // namespace
 

@@ -72,6 +72,10 @@ LaunchSpec parse_launch_spec(const std::string& path);
 /// compatible QoS between publishers and subscriptions.
 void validate_launch_spec(const LaunchSpec& spec, ComponentLoader& loader);
 
+/// Parses and validates spec text (component classes from the default ComponentLoader search path): the
+/// one-line error "file:line: ..." of the first problem, or "" when the spec is valid.
+std::string launch_spec_error(const std::string& text, const std::string& file);
+
 /// `cairn launch <spec> [--duration S] [--check]`: validate, start containers (child processes), load
 /// components, supervise (respawn crashed containers and reload their components), stop on SIGINT/SIGTERM.
 int run_launch_main(int argc, char** argv);
