@@ -1,0 +1,1 @@
+// Placeholder: filled in by the SLAM front-end work (issue 5).
