@@ -1,1 +1,135 @@
-// Placeholder: filled in by the SLAM front-end work (issue 5).
+// Kümmerle et al. 2009 relative-pose metric (see relations.hpp).
+#include "cairn/graph_slam/relations.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "cairn/sim/world.hpp"  // InputError
+
+namespace cairn::graph_slam {
+namespace {
+
+using sim::InputError;
+
+// Splits a line into numbers; returns false if any token is not a finite number.
+bool parseNumbers(const std::string& line, std::vector<double>& out) {
+  out.clear();
+  std::istringstream in(line);
+  std::string tok;
+  while (in >> tok) {
+    char* end = nullptr;
+    const double v = std::strtod(tok.c_str(), &end);
+    if (end == tok.c_str() || *end != '\0' || !std::isfinite(v)) return false;
+    out.push_back(v);
+  }
+  return true;
+}
+
+bool skippable(const std::string& line) {
+  const auto p = line.find_first_not_of(" \t\r");
+  return p == std::string::npos || line[p] == '#';
+}
+
+template <typename Fn>
+void forEachLine(const std::string& path, Fn&& fn) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open file");
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (skippable(line)) continue;
+    fn(line, n);
+  }
+}
+
+double mean(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x;
+  return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+}
+
+double stddev(const std::vector<double>& v, double m) {
+  if (v.size() < 2) return 0.0;
+  double s = 0.0;
+  for (double x : v) s += (x - m) * (x - m);
+  return std::sqrt(s / static_cast<double>(v.size() - 1));
+}
+
+}  // namespace
+
+std::vector<Relation> readRelations(const std::string& path) {
+  std::vector<Relation> out;
+  std::vector<double> v;
+  forEachLine(path, [&](const std::string& line, int n) {
+    if (!parseNumbers(line, v) || v.size() != 8)
+      throw InputError(path, n, "expected 8 numbers `t1 t2 x y z roll pitch yaw`");
+    Relation r;
+    r.t1 = v[0];
+    r.t2 = v[1];
+    r.delta.t = {v[2], v[3]};
+    r.delta.theta = normalizeAngle(v[7]);
+    r.line = n;
+    out.push_back(r);
+  });
+  return out;
+}
+
+std::vector<StampedPose> readPoses(const std::string& path) {
+  std::vector<StampedPose> out;
+  std::vector<double> v;
+  forEachLine(path, [&](const std::string& line, int n) {
+    if (!parseNumbers(line, v) || v.size() != 4) throw InputError(path, n, "expected 4 numbers `timestamp x y theta`");
+    out.push_back({v[0], {{v[1], v[2]}, normalizeAngle(v[3])}});
+  });
+  return out;
+}
+
+void writePoses(const std::string& path, const std::vector<StampedPose>& poses) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) throw InputError(path, 0, "cannot write file");
+  for (const auto& p : poses)
+    std::fprintf(f, "%.6f %.9g %.9g %.9g\n", p.stamp, p.pose.t.x(), p.pose.t.y(), p.pose.theta);
+  if (std::fclose(f) != 0) throw InputError(path, 0, "error while writing file");
+}
+
+RelationsResult evaluateRelations(const std::vector<Relation>& relations, std::vector<StampedPose> poses,
+                                  const RelationsOptions& options) {
+  std::sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return a.stamp < b.stamp; });
+  auto find = [&](double t) -> const StampedPose* {
+    auto it = std::lower_bound(poses.begin(), poses.end(), t - options.stamp_tolerance,
+                               [](const StampedPose& p, double s) { return p.stamp < s; });
+    if (it == poses.end() || it->stamp > t + options.stamp_tolerance) return nullptr;
+    return &*it;
+  };
+  RelationsResult r;
+  r.relations = relations.size();
+  std::vector<double> te, re;
+  for (const auto& rel : relations) {
+    const StampedPose* a = find(rel.t1);
+    const StampedPose* b = find(rel.t2);
+    if (a == nullptr || b == nullptr) {
+      if (r.missing++ == 0) r.first_missing_line = rel.line;
+      continue;
+    }
+    const Pose2 est = compose(inverse(a->pose), b->pose);
+    const Pose2 err = compose(inverse(rel.delta), est);
+    te.push_back(err.t.norm());
+    re.push_back(std::abs(normalizeAngle(err.theta)));
+  }
+  r.used = te.size();
+  r.trans_mean = mean(te);
+  r.trans_std = stddev(te, r.trans_mean);
+  r.rot_mean = mean(re);
+  r.rot_std = stddev(re, r.rot_mean);
+  if (!te.empty()) {
+    r.trans_max = *std::max_element(te.begin(), te.end());
+    r.rot_max = *std::max_element(re.begin(), re.end());
+  }
+  return r;
+}
+
+}  // namespace cairn::graph_slam

@@ -16,8 +16,12 @@
 #include "cairn/graph_slam/gnc.hpp"
 #include "cairn/graph_slam/initialization.hpp"
 #include "cairn/graph_slam/optimizer.hpp"
+#include "cli_util.hpp"
+#include "verbs.hpp"
 
 namespace gs = cairn::graph_slam;
+using cairn::slam_cli::jsonNumber;
+using cairn::slam_cli::parseInt;
 
 namespace {
 
@@ -26,29 +30,13 @@ constexpr const char* kUsage =
     "                           [--init guess|odometry|chordal] [--max-iters N] [--json]\n"
     "                           [--fix-information reject|clamp] [--skip-unknown-tags] [--threads N]\n"
     "  KERNEL: none, huber, cauchy, gm (Geman-McClure), dcs (dynamic covariance scaling);\n"
-    "          gnc[:C2] runs graduated non-convexity over the loop closures instead\n";
+    "          gnc[:C2] runs graduated non-convexity over the loop closures instead\n"
+    "       cairn slam eval --relations <file> --poses <poses.txt> [--json] [--allow-missing]\n"
+    "                       [--stamp-tolerance S]   Kuemmerle et al. 2009 relative-pose error\n";
 
 int usageError(const std::string& what) {
   std::cerr << "cairn: slam: " << what << "\n" << kUsage;
   return 2;
-}
-
-std::string jsonNumber(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.17g", v);
-  return buf;
-}
-
-int parseInt(const std::string& s, const char* what) {
-  std::size_t pos = 0;
-  int v = 0;
-  try {
-    v = std::stoi(s, &pos);
-  } catch (const std::exception&) {
-    pos = 0;
-  }
-  if (pos != s.size() || s.empty()) throw std::invalid_argument(std::string(what) + " must be an integer, got '" + s + "'");
-  return v;
 }
 
 int optimizeVerb(const std::vector<std::string>& args) {
@@ -205,5 +193,7 @@ int main(int argc, char** argv) {
   const std::string verb = args[0];
   args.erase(args.begin());
   if (verb == "optimize") return optimizeVerb(args);
+  if (verb == "run") return slamRunVerb(args);
+  if (verb == "eval") return slamEvalVerb(args);
   return usageError("unknown verb '" + verb + "'");
 }
