@@ -59,6 +59,13 @@ DdsWriter::~DdsWriter() {
   if (writer_ > 0) dds_delete(writer_);
 }
 
+bool DdsWriter::wait_for_acks(int64_t timeout_ns) const {
+  const dds_return_t rc = dds_wait_for_acks(writer_, timeout_ns < 0 ? DDS_INFINITY : timeout_ns);
+  if (rc == DDS_RETCODE_OK) return true;
+  if (rc == DDS_RETCODE_TIMEOUT) return false;
+  throw std::runtime_error(std::string("dds_wait_for_acks failed: ") + dds_strretcode(rc));
+}
+
 void DdsWriter::write(const void* cpp, int64_t source_timestamp_ns) {
   // The C sample borrows the C++ message's buffers (strings, primitive sequences): nothing is copied
   // before Cyclone serializes it.

@@ -196,3 +196,32 @@ TEST(DdsPath, TransientLocalReachesLateJoinersInAndOutOfProcess) {
   EXPECT_EQ(l, 1);
   EXPECT_EQ(r, 1);
 }
+
+TEST(DdsPath, WaitForAllAckedReturnsOnceRemoteReadersHoldTheMessage) {
+  Executor exec;
+  auto ctx_a = cairn::Context::create();
+  auto ctx_b = cairn::Context::create();
+  Node a(opts("acked_talker", exec, ctx_a));
+  auto pub = a.create_publisher<String>("acked", cairn::QoS{}.keep_all());
+  String m;
+  m.data = "nobody listens";
+  pub->publish(m);
+  EXPECT_TRUE(pub->wait_for_all_acked(0ns)) << "no readers: nothing to wait for";
+
+  // A raw reliable reader in the other context, never taken from by an executor: after the acknowledgment the
+  // sample must already be in its history, for every message of a burst.
+  cairn::DdsReader reader(*ctx_b, cairn::dds_topic_name("/acked"), cairn::msgs::type_support<String>(),
+                          cairn::QoS{}.keep_all(), cairn::DdsEndpointOptions{"/acked_reader", true}, [](cairn::DdsReader&) {});
+  ASSERT_TRUE(exec.spin_until([&] { return pub->inter_process_subscription_count() == 1; }, 10s));
+  ASSERT_TRUE(exec.spin_until([&] { return reader.matched() == 1; }, 10s));
+  for (int i = 0; i < 50; ++i) {
+    m.data = std::string(2000 + i, 'a' + static_cast<char>(i % 26));
+    pub->publish(m);
+    ASSERT_TRUE(pub->wait_for_all_acked(10s)) << "message " << i << " not acknowledged";
+    String got;
+    cairn::MessageInfo info;
+    ASSERT_TRUE(reader.take(&got, info)) << "acknowledged message " << i << " is not in the reader's history";
+    EXPECT_EQ(got.data, m.data);
+    EXPECT_FALSE(reader.take(&got, info));
+  }
+}

@@ -38,6 +38,10 @@ class DdsWriter {
   /// Number of matched readers (in other processes when ignore_local). Kept up to date by a
   /// publication-matched listener, so asking costs an atomic load (it is asked on every publish).
   int matched() const { return matched_.load(std::memory_order_relaxed); }
+  /// Blocks until every matched reliable reader has acknowledged every sample written so far (dds_wait_for_acks:
+  /// received into the reader's history, not necessarily taken) or `timeout_ns` passed (< 0: no limit).
+  /// True when acknowledged (also with no reliable readers), false on timeout.
+  bool wait_for_acks(int64_t timeout_ns) const;
   Gid guid() const { return guid_; }
   int32_t entity() const { return writer_; }
 

@@ -2,6 +2,7 @@
 #define CAIRN_PUBLISHER_HPP
 
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <string>
 
@@ -81,6 +82,13 @@ class Publisher : public PublisherBase {
   std::size_t inter_process_subscription_count() const { return dds_ ? static_cast<std::size_t>(dds_->matched()) : 0; }
   std::size_t subscription_count() const { return intra_process_subscription_count() + inter_process_subscription_count(); }
   Gid gid() const { return gid_; }
+  /// Waits until every matched reliable subscription in another process has acknowledged all messages published
+  /// so far (DDS acknowledgment: in the reader's history), at most `timeout` (negative: no limit); true when all
+  /// are acknowledged, also with no DDS leg or no reliable readers. Intra-process delivery is synchronous and
+  /// needs no acknowledgment. Pacing a producer by its consumers (rclcpp: Publisher::wait_for_all_acked).
+  bool wait_for_all_acked(std::chrono::nanoseconds timeout = std::chrono::nanoseconds(-1)) const {
+    return !dds_ || dds_->wait_for_acks(timeout.count());
+  }
 
  private:
   std::shared_ptr<Channel<T>> channel_;
