@@ -417,18 +417,104 @@ void PeopleSimulator::spawnCrowd(double t0, double t1) {
       a.pos = a.path.front();
       a.active = true;
       a.heading = std::atan2(a.path[1].y - a.path[0].y, a.path[1].x - a.path[0].x);
-      // walk the part of the step after the arrival time
-      moveAlongPath(a, std::max(0.0, t1 - t));
+      a.vel = a.speed * Vec2{std::cos(a.heading), std::sin(a.heading)};
+      // walk the part of the step after the arrival time (with the social force: update()'s sub-steps do)
+      if (!social_.enabled) moveAlongPath(a, std::max(0.0, t1 - t));
       agents_.push_back(std::move(a));
       ++spawned_;
     }
   }
 }
 
+bool PeopleSimulator::followsPath(const Agent& a, double t) const {
+  if (a.kind == Agent::Kind::Scripted) return a.active;
+  return a.kind == Agent::Kind::Crowd && !a.done && t > a.start_time;
+}
+
+void PeopleSimulator::socialStep(double t, double h) {
+  // Helbing & Molnár 1995 eq. (1)-(4) with the exponential repulsion of Helbing, Farkas & Vicsek 2000 (see
+  // SocialForceConfig). Forces from the positions at the start of the step: the result does not depend on the
+  // agents' order.
+  const SocialForceConfig& c = social_;
+  const double r2max = c.interaction_radius * c.interaction_radius;
+  std::vector<Vec2> acc(agents_.size());
+  std::vector<char> social(agents_.size(), 0);
+  for (std::size_t i = 0; i < agents_.size(); ++i) {
+    Agent& a = agents_[i];
+    if (!followsPath(a, t)) continue;
+    if (a.next >= a.path.size()) a.next = 0;  // scripted walkers loop (crowd agents are done before this)
+    const Vec2 to = a.path[a.next] - a.pos;
+    const double dist = norm(to);
+    const Vec2 e = dist > 1e-9 ? (1.0 / dist) * to : Vec2{std::cos(a.heading), std::sin(a.heading)};
+    Vec2 f = (1.0 / c.tau) * (a.speed * e - a.vel);
+    bool near = false;
+    const auto repel = [&](Vec2 other, Vec2 other_vel, double radius) {
+      const Vec2 dp = a.pos - other;
+      if (dot(dp, dp) >= r2max) return;
+      near = true;
+      // Collision prediction (Zanlungo, Ikeda & Kanda 2011): the repulsion acts at the relative position of
+      // closest approach within prediction_horizon, so walkers on a collision course turn away early.
+      const Vec2 dv = a.vel - other_vel;
+      const double vv = dot(dv, dv);
+      const double tc = vv > 1e-12 ? std::clamp(-dot(dp, dv) / vv, 0.0, c.prediction_horizon) : 0.0;
+      const Vec2 d = dp + tc * dv;
+      const double dn = norm(d);
+      const Vec2 n = dn > 1e-9 ? (1.0 / dn) * d : Vec2{e.y, -e.x};  // dead ahead: to the right
+      const double cos_phi = -dot(n, e);  // 1: the other is straight ahead
+      const double w = c.anisotropy + (1.0 - c.anisotropy) * 0.5 * (1.0 + cos_phi);
+      const double mag = c.strength * std::exp((c.body_radius + radius - dn) / c.range);
+      f = f + (w * mag) * n;
+      if (cos_phi > 0) f = f + (c.keep_right * w * mag * cos_phi) * Vec2{e.y, -e.x};
+    };
+    for (std::size_t j = 0; j < agents_.size(); ++j) {
+      const Agent& b = agents_[j];
+      const bool present = b.kind == Agent::Kind::Recorded ? b.active : followsPath(b, t);
+      if (j != i && present) repel(b.pos, b.vel, c.body_radius);
+    }
+    if (robot_radius_ > 0) repel(robot_pos_, Vec2{}, robot_radius_);
+    acc[i] = f;
+    social[i] = near;
+  }
+  for (std::size_t i = 0; i < agents_.size(); ++i) {
+    Agent& a = agents_[i];
+    if (!followsPath(a, t)) continue;
+    if (!social[i]) {  // nobody within interaction_radius: exactly along the path at the desired speed
+      moveAlongPath(a, std::min(h, t - a.start_time));
+      a.vel = a.done ? Vec2{} : a.speed * Vec2{std::cos(a.heading), std::sin(a.heading)};
+      continue;
+    }
+    a.vel = a.vel + h * acc[i];
+    const double vmax = c.max_speed_factor * a.speed, v = norm(a.vel);
+    if (v > vmax) a.vel = (vmax / v) * a.vel;
+    Vec2 p = a.pos + h * a.vel;
+    if (free_ && free_->free(a.pos) && !free_->free(p)) {  // slide along walls, never into them
+      if (free_->free({p.x, a.pos.y})) p.y = a.pos.y, a.vel.y = 0;
+      else if (free_->free({a.pos.x, p.y})) p.x = a.pos.x, a.vel.x = 0;
+      else p = a.pos, a.vel = {};
+    }
+    a.pos = p;
+    if (norm(a.vel) > 0.05) a.heading = std::atan2(a.vel.y, a.vel.x);
+    while (norm(a.path[a.next] - a.pos) < c.waypoint_tolerance) {
+      if (++a.next < a.path.size()) continue;
+      if (a.kind == Agent::Kind::Crowd) {
+        a.done = true;
+        break;
+      }
+      a.next = 0;
+      break;
+    }
+  }
+}
+
 void PeopleSimulator::update(double t) {
   const double dt = started_ ? std::max(0.0, t - t_) : 0.0;
-  if (crowd_) spawnCrowd(started_ ? t_ : t, t);
+  const double t_prev = started_ ? t_ : t;
+  if (crowd_) spawnCrowd(t_prev, t);
   started_ = true;
+  if (social_.enabled && dt > 0) {
+    const int n = std::max(1, static_cast<int>(std::ceil(dt / social_.max_step - 1e-9)));
+    for (int k = 1; k <= n; ++k) socialStep(t_prev + dt * k / n, dt / n);
+  }
   t_ = t;
   people_.clear();
   for (auto& a : agents_) {
@@ -440,20 +526,22 @@ void PeopleSimulator::update(double t) {
       a.active = tt >= a.traj->start() && tt <= a.traj->end();
       if (!a.active) continue;
       a.traj->sample(tt, a.pos, vel);
+      a.vel = vel;
       if (norm(vel) > 0.05) a.heading = std::atan2(vel.y, vel.x);
     } else if (a.kind == Agent::Kind::Scripted) {
       if (t < a.start_time) continue;
       if (!a.active) {
         a.active = true;
-      } else {
+        a.vel = a.speed * Vec2{std::cos(a.heading), std::sin(a.heading)};
+      } else if (!social_.enabled) {
         moveAlongPath(a, dt);
       }
-      vel = a.speed * Vec2{std::cos(a.heading), std::sin(a.heading)};
+      vel = social_.enabled ? a.vel : a.speed * Vec2{std::cos(a.heading), std::sin(a.heading)};
     } else {
       if (a.done) continue;
-      if (t > a.start_time) moveAlongPath(a, std::min(dt, t - a.start_time));
+      if (!social_.enabled && t > a.start_time) moveAlongPath(a, std::min(dt, t - a.start_time));
       if (a.done) continue;
-      vel = a.speed * Vec2{std::cos(a.heading), std::sin(a.heading)};
+      vel = social_.enabled ? a.vel : a.speed * Vec2{std::cos(a.heading), std::sin(a.heading)};
     }
     const double moved = norm(a.pos - before);
     if (moved < 1.0) a.phase = std::fmod(a.phase + 2.0 * std::numbers::pi * moved / gait_.stride_length, 2.0 * std::numbers::pi);

@@ -20,6 +20,8 @@ Simulator::Simulator(World world, SimConfig config)
       odom_(config_.odometry, robot_.pose(), Rng(config_.seed).fork(kOdometry)),
       people_(world_, config_.gait, Rng(config_.seed).fork(kPeople), config_.people, config_.crowd),
       laser_rng_(Rng(config_.seed).fork(kLaser)) {
+  people_.setSocialForce(config_.social);
+  people_.setRobot({robot_.pose().x, robot_.pose().y}, config_.robot.footprint_radius);
   people_.update(0.0);
 }
 
@@ -96,6 +98,7 @@ void Simulator::stepOnce(SimOutput& out) {
   odom_.update(robot_.pose());
   ++step_;
   t_ = step_ * dt;  // no accumulated floating-point drift
+  people_.setRobot({robot_.pose().x, robot_.pose().y}, config_.robot.footprint_radius);
   people_.update(t_);
 }
 

@@ -129,6 +129,7 @@ void Furniture::geometry(double t, std::vector<Segment>& segments, std::vector<C
 
 double CrowdConfig::rateAt(double t) const {
   double f = 1.0;
+  t += start_time;
   for (const auto& term : terms) f += term.amplitude * std::cos(2.0 * std::numbers::pi * (t - term.phase) / term.period);
   return std::max(0.0, base_rate * f) / 3600.0;
 }
@@ -457,7 +458,7 @@ struct Parser {
     }
     if (const auto n = root["crowd"]) {
       const std::string p = "crowd.";
-      checkKeys(n, {"sources", "sinks", "base_rate", "terms", "speed", "speed_sigma", "max_people"}, p);
+      checkKeys(n, {"sources", "sinks", "base_rate", "terms", "speed", "speed_sigma", "max_people", "start_time"}, p);
       CrowdConfig c;
       auto names = [&](const char* key) {
         const auto list = need(n, key, p);
@@ -488,6 +489,7 @@ struct Parser {
       c.speed = positive(n, "speed", p, c.speed);
       c.speed_sigma = num(n, "speed_sigma", p, c.speed_sigma);
       c.max_people = static_cast<int>(num(n, "max_people", p, c.max_people));
+      c.start_time = num(n, "start_time", p, c.start_time);
       w.crowd = c;
     }
     w.computeBounds();

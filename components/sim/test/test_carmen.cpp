@@ -4,8 +4,11 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <unistd.h>
+#include <vector>
 
 #include "cairn/sim/carmen.hpp"
+#include "cairn/sim/log_playback.hpp"
 #include "cairn/sim/rng.hpp"
 
 using namespace cairn::sim;
@@ -205,4 +208,92 @@ TEST(CarmenReader, FullAcesLogFromSharedData) {
   EXPECT_EQ(c.beams, 180u);
   EXPECT_TRUE(c.monotonic);
   EXPECT_NEAR(c.last_laser - c.first_laser, 1365.5, 0.5);  // README: 1365.5 s
+}
+
+TEST(LogPlayback, StreamsTheFullAcesLogWithABoundedLookAhead) {
+  // Memory does not grow with the log: 14749 records pass through a look-ahead of 8.
+  const std::string path = std::string(CAIRN_SOURCE_ROOT) + "/../shared/data/slam_logs_carmen/radish/aces.clf.bz2";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "shared data not present: " << path;
+#if !CAIRN_SIM_HAVE_BZIP2
+  GTEST_SKIP() << "built without bzip2";
+#endif
+  LogPlaybackOptions opt;
+  opt.lookahead = 8;
+  LogPlayback playback(path, opt);
+  EXPECT_EQ(playback.buffered(), 8u);
+  CarmenReader reference(path);
+  CarmenRecord want;
+  std::size_t lasers = 0, odoms = 0, most = 0;
+  while (const CarmenRecord* r = playback.peek()) {
+    most = std::max(most, playback.buffered());
+    ASSERT_TRUE(reference.next(want));
+    ASSERT_EQ(stampOf(*r), stampOf(want)) << "record " << lasers + odoms;
+    ASSERT_EQ(r->index(), want.index());
+    (std::holds_alternative<CarmenLaser>(*r) ? lasers : odoms)++;
+    playback.pop();
+  }
+  EXPECT_FALSE(reference.next(want));
+  EXPECT_EQ(lasers, 7374u);
+  EXPECT_EQ(odoms, 7375u);
+  EXPECT_EQ(playback.played(), 7374u + 7375u);
+  EXPECT_EQ(most, 8u);
+  EXPECT_EQ(playback.maxBuffered(), 8u);
+  EXPECT_EQ(playback.buffered(), 0u);
+}
+
+TEST(LogPlayback, LimitRewindAndLateMalformedLines) {
+  const std::string path = kData + "aces_head60.clf";
+  LogPlaybackOptions opt;
+  opt.lookahead = 4;
+  opt.limit = 10;
+  LogPlayback playback(path, opt);
+  std::vector<double> first_pass;
+  while (const CarmenRecord* r = playback.peek()) {
+    first_pass.push_back(stampOf(*r));
+    playback.pop();
+  }
+  ASSERT_EQ(first_pass.size(), 10u);
+  playback.rewind();
+  for (double t : first_pass) {
+    ASSERT_NE(playback.peek(), nullptr);
+    EXPECT_EQ(stampOf(*playback.peek()), t);
+    playback.pop();
+  }
+  EXPECT_EQ(playback.peek(), nullptr);
+
+  // A malformed line beyond the look-ahead: every record before it is played, then file:line is raised.
+  namespace fs = std::filesystem;
+  const fs::path bad = fs::temp_directory_path() / ("cairn_sim_late_bad_" + std::to_string(::getpid()) + ".clf");
+  {
+    std::ofstream out(bad);
+    for (int i = 0; i < 20; ++i) out << "ODOM " << i << " 0 0 0 0 0 " << i << ".5 h 1.0\n";
+    out << "ODOM 0 0 zero 0 0 0 99.0 h 2.0\n";
+  }
+  LogPlaybackOptions lo;
+  lo.lookahead = 4;
+  LogPlayback late(bad.string(), lo);
+  int played = 0;
+  try {
+    while (late.peek()) {
+      late.pop();
+      ++played;
+    }
+    FAIL() << "expected the malformed line";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 21);
+    EXPECT_EQ(played, 20);
+  }
+  // Within the look-ahead: rejected at construction.
+  lo.lookahead = 32;
+  EXPECT_THROW(LogPlayback(bad.string(), lo), InputError);
+  lo.reader.skip_malformed = true;
+  LogPlayback skipping(bad.string(), lo);
+  played = 0;
+  while (skipping.peek()) {
+    skipping.pop();
+    ++played;
+  }
+  EXPECT_EQ(played, 20);
+  fs::remove(bad);
+  EXPECT_THROW(LogPlayback("/nonexistent/log.clf"), InputError);
 }

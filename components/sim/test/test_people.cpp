@@ -4,6 +4,9 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <optional>
+#include <utility>
+#include <vector>
 
 #include "cairn/sim/people.hpp"
 
@@ -218,4 +221,107 @@ TEST(FreeSpace, ClosedDoorsBlockPlanning) {
   grid.setDoorTime(w, 150.0);
   EXPECT_TRUE(grid.plan({2, 1}, {8, 1}).empty());  // the only passage is closed
   EXPECT_FALSE(grid.plan({2, 1}, {2, 8}).empty()); // same room: still reachable
+}
+
+namespace {
+struct Approach {
+  double min_centre = 1e9;  ///< closest centre distance
+  double min_legs = 1e9;    ///< closest leg-to-leg (different people) or leg-to-robot centre distance
+  std::vector<Vec2> end;
+};
+// Walkers of `yaml` (a big empty room) for `duration` s at 100 Hz, optionally with a robot at `robot`.
+Approach walk(const std::string& people_yaml, double duration, const SocialForceConfig& social,
+              std::optional<Vec2> robot = std::nullopt, double robot_radius = 0.28) {
+  const World w = parseWorld("walls: [[[-20,-20],[30,-20],[30,20],[-20,20],[-20,-20]]]\npeople:\n" + people_yaml, "t.yaml");
+  PeopleSimulator ps(w, GaitConfig{}, Rng(3));
+  ps.setSocialForce(social);
+  if (robot) ps.setRobot(*robot, robot_radius);
+  Approach r;
+  for (int k = 0; k <= std::lround(duration * 100); ++k) {
+    ps.update(k * 0.01);
+    const auto& p = ps.people();
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (robot) {
+        r.min_centre = std::min(r.min_centre, norm(p[i].position - *robot));
+        for (const auto& l : p[i].legs) r.min_legs = std::min(r.min_legs, norm(l - *robot));
+      }
+      for (std::size_t j = i + 1; j < p.size(); ++j) {
+        r.min_centre = std::min(r.min_centre, norm(p[i].position - p[j].position));
+        for (const auto& a : p[i].legs)
+          for (const auto& b : p[j].legs) r.min_legs = std::min(r.min_legs, norm(a - b));
+      }
+    }
+  }
+  for (const auto& p : ps.people()) r.end.push_back(p.position);
+  return r;
+}
+const std::string kHeadOn =
+    "  - {kind: scripted, waypoints: [[0,0],[10,0],[20,0]], speed: 1.2, start_time: 0}\n"
+    "  - {kind: scripted, waypoints: [[20,0],[10,0],[0,0]], speed: 1.0, start_time: 0}\n";
+}  // namespace
+
+TEST(SocialForce, HeadOnWalkersPassEachOtherWithoutOverlapping) {
+  SocialForceConfig off;
+  off.enabled = false;
+  const Approach blind = walk(kHeadOn, 15.0, off);
+  EXPECT_LT(blind.min_centre, 0.05) << "without the social force they walk through each other (test is meaningful)";
+
+  const Approach a = walk(kHeadOn, 15.0, SocialForceConfig{});
+  // Bodies (2 × body_radius = 0.5 m) may be squeezed a little, legs never touch: a sensible bound well above
+  // 2 leg radii between any two legs of different people.
+  EXPECT_GT(a.min_centre, 0.45);
+  EXPECT_GT(a.min_legs, 4 * GaitConfig{}.leg_radius);
+  // They got past each other (no deadlock) and went on along their paths.
+  ASSERT_EQ(a.end.size(), 2u);
+  EXPECT_GT(a.end[0].x, 15.0);
+  EXPECT_LT(a.end[1].x, 7.0);
+  EXPECT_LT(std::abs(a.end[0].y) + std::abs(a.end[1].y), 1.0) << "back on their lines after passing";
+}
+
+TEST(SocialForce, AWalkerDoesNotWalkThroughTheRobot) {
+  const std::string one = "  - {kind: scripted, waypoints: [[0,0],[10,0],[20,0]], speed: 1.0, start_time: 0}\n";
+  SocialForceConfig off;
+  off.enabled = false;
+  EXPECT_LT(walk(one, 12.0, off, Vec2{8, 0}).min_centre, 0.05);
+  const Approach a = walk(one, 12.0, SocialForceConfig{}, Vec2{8, 0});
+  EXPECT_GT(a.min_centre, 0.28 + 0.2);  // robot footprint + more than the hip half width
+  EXPECT_GT(a.min_legs, 0.28 + GaitConfig{}.leg_radius) << "a leg inside the robot's footprint";
+  ASSERT_EQ(a.end.size(), 1u);
+  EXPECT_GT(a.end[0].x, 11.0) << "walked around the robot";
+}
+
+TEST(SocialForce, CrowdStaysDeterministicForASeed) {
+  // The office crowd at its busiest (start_time: the daily term's peak) for 20 simulated minutes, twice.
+  World w = loadWorld(resolveWorldPath("office"));
+  ASSERT_TRUE(w.crowd.has_value());
+  w.crowd->start_time = w.crowd->terms.front().phase;
+  w.crowd->base_rate *= 10;
+  const auto run = [&](std::uint64_t seed) {
+    PeopleSimulator ps(w, GaitConfig{}, Rng(seed));
+    std::vector<double> trace;
+    for (int k = 0; k <= 1200; ++k) {
+      ps.update(k * 1.0);
+      for (const auto& p : ps.people()) trace.insert(trace.end(), {double(p.id), p.position.x, p.position.y, p.heading});
+    }
+    return std::make_pair(trace, ps.spawnedCrowd());
+  };
+  const auto a = run(11), b = run(11), c = run(12);
+  EXPECT_GT(a.second, 10);
+  EXPECT_TRUE(a.first == b.first) << "same seed, different trajectories";
+  EXPECT_FALSE(a.first == c.first);
+}
+
+TEST(Crowd, StartTimeShiftsTheSchedule) {
+  World w = parseWorld(
+      "walls: [[[0,0],[10,0],[10,10],[0,10],[0,0]]]\n"
+      "regions: [{name: a, rect: [1,1,3,3]}, {name: b, rect: [7,7,9,9]}]\n"
+      "crowd: {sources: [a], sinks: [b], base_rate: 10, start_time: 21600,\n"
+      "        terms: [{period: 86400, amplitude: 0.9, phase: 43200}, {period: 604800, amplitude: 0.3, phase: 0}]}\n",
+      "t.yaml");
+  ASSERT_TRUE(w.crowd.has_value());
+  EXPECT_EQ(w.crowd->start_time, 21600.0);
+  CrowdConfig shifted = *w.crowd, plain = *w.crowd;
+  plain.start_time = 0;
+  for (double t : {0.0, 1000.0, 21600.0, 50000.0, 300000.0}) EXPECT_DOUBLE_EQ(shifted.rateAt(t), plain.rateAt(t + 21600.0));
+  EXPECT_GT(shifted.rateAt(21600.0), shifted.rateAt(0.0));  // t = 6 h of sim time is noon of the schedule
 }

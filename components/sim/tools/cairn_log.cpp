@@ -1,10 +1,14 @@
 // cairn-log: CARMEN log playback from the command line (`cairn log <verb> ...`).
 //   cairn-log info <file>                        counts, time span, beams per scan
-//   cairn-log play <file> [--rate R] [--skip-malformed] [--limit N]
-//       streams the records to stdout, one line each (`<stamp> scan <n> <frame>` / `<stamp> odom x y theta`),
-//       paced at R times the log's speed (R = 0: as fast as possible, the default).
-// Publishing /scan, /odom, TF and /clock over DDS is the player component's job (runtime adapter).
+//   cairn-log play <file> [--rate R] [--pace time|consumers] [--skip-malformed] [--limit N]
+//                  [--wait-subscribers N] [--loop] [-p name:=value]... [--print]
+//       publishes scan, odom, /tf, /tf_static and /clock over DDS: the tool loads the cairn_sim::LogPlayer
+//       component into an in-process container (one playback implementation) and exits when it is done.
+//       R = 0 (the default): no wall-clock pacing; --pace consumers: each record only after every matched
+//       reliable subscriber acknowledged the previous one. --print writes the records to stdout instead, one
+//       line each (`<stamp> scan <n> <message> x y theta` / `<stamp> odom x y theta tv rv`), paced by R.
 // Bad input: one line `cairn: <file>:<line>: <what>` on stderr and exit code 2.
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -12,10 +16,21 @@
 #include <cstring>
 #include <algorithm>
 #include <iostream>
+#include <map>
 #include <string>
 #include <thread>
 
 #include "cairn/sim/carmen.hpp"
+#include "cairn/sim/log_playback.hpp"
+#ifdef CAIRN_LOG_HAVE_RUNTIME
+#include <unistd.h>
+
+#include <csignal>
+
+#include "cairn/container.hpp"
+#include "cairn/parameters.hpp"
+#include "log_player.hpp"
+#endif
 
 using namespace cairn::sim;
 
@@ -46,56 +61,140 @@ int info(const std::string& path, CarmenReaderOptions opt) {
   return 0;
 }
 
-int play(const std::string& path, CarmenReaderOptions opt, double rate, long limit) {
-  CarmenReader reader(path, std::move(opt));
-  CarmenRecord r;
+struct PlayOptions {
+  double rate = 0.0;
+  std::string pace = "time";
+  long limit = -1;
+  long wait_subscribers = 0;
+  bool loop = false, print = false;
+  std::map<std::string, std::string> params;  // -p name:=value
+};
+
+// --print: the records as text, paced at `rate` × the log's speed (0: as fast as possible).
+int print(const std::string& path, CarmenReaderOptions opt, const PlayOptions& p) {
+  LogPlaybackOptions lo;
+  lo.reader = std::move(opt);
+  lo.limit = p.limit > 0 ? static_cast<std::size_t>(p.limit) : 0;
+  LogPlayback playback(path, std::move(lo));
   const auto wall0 = std::chrono::steady_clock::now();
   double log0 = NAN;
-  long n = 0;
-  while ((limit < 0 || n < limit) && reader.next(r)) {
-    const double t = stampOf(r);
+  while (const CarmenRecord* r = playback.peek()) {
+    const double t = stampOf(*r);
     if (std::isnan(log0)) log0 = t;
-    if (rate > 0) std::this_thread::sleep_until(wall0 + std::chrono::duration<double>((t - log0) / rate));
-    if (auto* l = std::get_if<CarmenLaser>(&r))
+    if (p.rate > 0) std::this_thread::sleep_until(wall0 + std::chrono::duration<double>((t - log0) / p.rate));
+    if (auto* l = std::get_if<CarmenLaser>(r))
       std::printf("%.6f scan %zu %s %.3f %.3f %.4f\n", t, l->scan.ranges.size(), l->message.c_str(), l->robot_pose.x,
                   l->robot_pose.y, l->robot_pose.theta);
     else {
-      const auto& o = std::get<CarmenOdom>(r);
+      const auto& o = std::get<CarmenOdom>(*r);
       std::printf("%.6f odom %.4f %.4f %.4f %.3f %.3f\n", t, o.pose.x, o.pose.y, o.pose.theta, o.tv, o.rv);
     }
-    ++n;
+    playback.pop();
   }
   return 0;
+}
+
+#ifdef CAIRN_LOG_HAVE_RUNTIME
+std::atomic<bool> g_stop{false};
+
+// Publishing: the LogPlayer component in an in-process container, spun on this thread until it is done.
+int publish(const std::string& path, bool skip_malformed, const PlayOptions& p) {
+  std::signal(SIGINT, [](int) { g_stop = true; });
+  std::signal(SIGTERM, [](int) { g_stop = true; });
+  auto ctx = cairn::Context::create();
+  cairn::Executor exec;
+  cairn::ComponentLoader loader;
+  cairn::ComponentManager mgr(ctx, exec, "cairn_log_play_" + std::to_string(getpid()), loader);
+  cairn::LoadRequest req{"cairn_sim::LogPlayer", "log_player"};
+  req.parameters["file"] = path;
+  req.parameters["rate"] = p.rate;
+  req.parameters["pace"] = p.pace;
+  req.parameters["skip_malformed"] = skip_malformed;
+  req.parameters["limit"] = int64_t{std::max(0L, p.limit)};
+  req.parameters["wait_for_subscribers"] = int64_t{p.wait_subscribers};
+  req.parameters["loop"] = p.loop;
+  for (const auto& [k, v] : p.params) req.parameters[k] = cairn::parse_parameter_text(v);
+  const auto loaded = mgr.load(req);
+  if (!loaded.ok) {
+    std::cerr << "cairn: " << loaded.error << "\n";
+    return 2;
+  }
+  const auto player = std::static_pointer_cast<cairn_sim::LogPlayer>(mgr.get(loaded.unique_id));
+  while (!g_stop && !player->finished()) exec.spin_until([&] { return g_stop.load() || player->finished(); }, std::chrono::seconds(1));
+  // Reliable subscribers get what was published before the process goes away.
+  exec.spin_for(std::chrono::milliseconds(200));
+  std::cerr << "cairn: log play: " << player->scansPublished() << " scans, " << player->odometryPublished()
+            << " odometry records published\n";
+  if (player->failed()) {
+    std::cerr << "cairn: " << player->error() << "\n";
+    return 2;
+  }
+  return 0;
+}
+#endif
+
+int play(const std::string& path, CarmenReaderOptions opt, const PlayOptions& p) {
+  if (p.print) return print(path, std::move(opt), p);
+#ifdef CAIRN_LOG_HAVE_RUNTIME
+  return publish(path, opt.skip_malformed, p);
+#else
+  usageError("play: built without the cairn runtime, only --print is available");
+#endif
 }
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 3 || !std::strcmp(argv[1], "--help")) {
     std::cout << "usage: cairn-log info <file>\n"
-                 "       cairn-log play <file> [--rate R] [--skip-malformed] [--limit N]\n"
+                 "       cairn-log play <file> [--rate R] [--pace time|consumers] [--skip-malformed] [--limit N]\n"
+                 "                      [--wait-subscribers N] [--loop] [-p name:=value]... [--print]\n"
+                 "play publishes scan, odom, /tf, /tf_static and /clock (the cairn_sim::LogPlayer component, whose\n"
+                 "parameters -p sets); R = 0 (default): no wall-clock pacing; --pace consumers: each record after\n"
+                 "every reliable subscriber acknowledged the previous one; --print: text to stdout instead\n"
                  "files: CARMEN logs (.clf, .log), plain, gzip or bzip2\n";
     return argc < 3 ? 2 : 0;
   }
   const std::string verb = argv[1], path = argv[2];
   CarmenReaderOptions opt;
-  double rate = 0.0;
-  long limit = -1;
+  PlayOptions play_opts;
+  const auto number = [&](int& i, const std::string& a) {
+    if (i + 1 >= argc) usageError(a + " needs a value");
+    const std::string v = argv[++i];
+    char* end = nullptr;
+    const double x = std::strtod(v.c_str(), &end);
+    if (v.empty() || *end || !std::isfinite(x) || x < 0) usageError(a + ": '" + v + "' is not a number >= 0");
+    return x;
+  };
   for (int i = 3; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--skip-malformed") {
       opt.skip_malformed = true;
       opt.on_warning = [](const InputError& e) { std::cerr << "cairn: warning: " << e.what() << " (skipped)\n"; };
-    } else if (a == "--rate" && i + 1 < argc) {
-      rate = std::atof(argv[++i]);
-    } else if (a == "--limit" && i + 1 < argc) {
-      limit = std::atol(argv[++i]);
+    } else if (a == "--rate") {
+      play_opts.rate = number(i, a);
+    } else if (a == "--limit") {
+      play_opts.limit = static_cast<long>(number(i, a));
+    } else if (a == "--wait-subscribers") {
+      play_opts.wait_subscribers = static_cast<long>(number(i, a));
+    } else if (a == "--pace" && i + 1 < argc) {
+      play_opts.pace = argv[++i];
+      if (play_opts.pace != "time" && play_opts.pace != "consumers") usageError("--pace: '" + play_opts.pace + "' (time or consumers)");
+    } else if (a == "--loop") {
+      play_opts.loop = true;
+    } else if (a == "--print") {
+      play_opts.print = true;
+    } else if (a == "-p" && i + 1 < argc) {
+      const std::string kv = argv[++i];
+      const auto eq = kv.find(":=");
+      if (eq == std::string::npos || eq == 0) usageError("-p expects name:=value, got '" + kv + "'");
+      play_opts.params[kv.substr(0, eq)] = kv.substr(eq + 2);
     } else {
       usageError("unknown option '" + a + "'");
     }
   }
   try {
     if (verb == "info") return info(path, opt);
-    if (verb == "play") return play(path, opt, rate, limit);
+    if (verb == "play") return play(path, opt, play_opts);
   } catch (const InputError& e) {
     std::cerr << "cairn: " << e.what() << "\n";
     return 2;

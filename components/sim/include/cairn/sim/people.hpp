@@ -25,6 +25,27 @@ struct GaitConfig {
   double swing_speed = 1.0;       ///< m/s
 };
 
+/// Social force between walkers that follow paths (scripted and crowd; recorded people replay their data),
+/// Helbing & Molnár 1995: dv/dt = (v0 e - v)/tau + Σ w(φ) A exp((r_ij - d_ij)/B) n_ij, with the anisotropy
+/// w(φ) = λ + (1-λ)(1+cos φ)/2 (others ahead count more), d_ij taken at the predicted closest approach
+/// (Zanlungo, Ikeda & Kanda 2011) so that walkers on a collision course turn away early. The robot repels like a person of radius
+/// robot_radius. A tangential term pushes to the walker's right when someone is ahead, which breaks the
+/// exact head-on symmetry (a convention, not in the paper). Integrated in steps of at most max_step.
+struct SocialForceConfig {
+  bool enabled = true;
+  double body_radius = 0.25;     ///< m, r_i
+  double strength = 2.0;         ///< A, m/s² (Helbing & Molnár use 2.1)
+  double range = 0.3;            ///< B, m
+  double tau = 0.5;              ///< s, relaxation time
+  double anisotropy = 0.35;      ///< λ
+  double keep_right = 0.5;       ///< tangential share of the repulsion from someone ahead
+  double interaction_radius = 3.0;  ///< m; with nobody nearer a walker follows its path exactly
+  double prediction_horizon = 1.5;  ///< s, repulsion evaluated at the predicted closest approach (Zanlungo 2011)
+  double max_speed_factor = 1.3; ///< |v| <= factor × desired speed
+  double waypoint_tolerance = 0.4;  ///< m, a path point counts as reached
+  double max_step = 0.05;        ///< s, integration step
+};
+
 /// Leg centres for a person at `position` walking along `heading` with `speed` at gait `phase`.
 void legPositions(const GaitConfig& gait, Vec2 position, double heading, double speed, double phase, Vec2 legs[2]);
 
@@ -96,6 +117,13 @@ class PeopleSimulator {
   /// Adds a scripted walker along waypoints (loops) at `speed`, appearing at `start_time`.
   void addScripted(std::vector<Vec2> waypoints, double speed, double start_time);
   int spawnedCrowd() const { return spawned_; }
+  void setSocialForce(const SocialForceConfig& c) { social_ = c; }
+  const SocialForceConfig& socialForce() const { return social_; }
+  /// The robot, repelling walkers (social force) from the next update() on; radius 0 = no robot.
+  void setRobot(Vec2 position, double radius) {
+    robot_pos_ = position;
+    robot_radius_ = radius;
+  }
 
  private:
   struct Agent {
@@ -108,6 +136,7 @@ class PeopleSimulator {
     double speed = 1.0;
     double start_time = 0.0;
     Vec2 pos;
+    Vec2 vel;                 // social-force velocity
     double heading = 0.0;
     double phase = 0.0;
     bool active = false;
@@ -115,6 +144,8 @@ class PeopleSimulator {
   };
   void spawnCrowd(double t0, double t1);
   void moveAlongPath(Agent& a, double dt);
+  bool followsPath(const Agent& a, double t) const;
+  void socialStep(double t, double h);
 
   const World& world_;
   GaitConfig gait_;
@@ -129,6 +160,9 @@ class PeopleSimulator {
   int next_id_ = 1;
   int spawned_ = 0;
   bool crowd_ = false;
+  SocialForceConfig social_;
+  Vec2 robot_pos_;
+  double robot_radius_ = 0.0;
 };
 
 }  // namespace cairn::sim

@@ -20,6 +20,7 @@ struct SimConfig {
   LaserConfig laser;
   OdometryNoiseConfig odometry;
   GaitConfig gait;
+  SocialForceConfig social;   ///< walkers avoid each other and the robot (footprint_radius)
   double physics_dt = 0.01;   ///< s
   double odom_rate = 50.0;    ///< Hz
   std::uint64_t seed = 1;

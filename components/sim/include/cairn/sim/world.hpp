@@ -118,7 +118,10 @@ struct CrowdConfig {
   double speed = 1.1;
   double speed_sigma = 0.15;
   int max_people = 30;
-  /// Rate (people/s) at one source at time t.
+  /// Schedule time at sim t = 0 (s): the rate terms see t + start_time, e.g. 201600 = Wednesday 08:00 when the
+  /// weekly term's t = 0 is Monday 00:00.
+  double start_time = 0.0;
+  /// Rate (people/s) at one source at sim time t.
   double rateAt(double t) const;
 };
 
