@@ -151,7 +151,7 @@ void LoopVerifier::save(const std::string& path) const {
     fs << "}";
     fs.release();
   } catch (const cv::Exception& e) {
-    throw fileError(path, std::string("cannot write model: ") + e.what());
+    throw fileError(path, "cannot write model: " + e.err);
   }
 }
 
@@ -195,7 +195,7 @@ LoopVerifier LoopVerifier::load(const std::string& path) {
     if (!impl->model->isTrained() || impl->model->getVarCount() != static_cast<int>(kPairFeatureCount))
       throw fileError(path, "model is not trained or does not take " + std::to_string(kPairFeatureCount) + " features");
   } catch (const cv::Exception& e) {
-    throw fileError(path, std::string("corrupt model file: ") + e.what());
+    throw fileError(path, "corrupt model file: " + e.err);  // e.what() spans lines
   }
   v.impl_ = std::move(impl);
   return v;

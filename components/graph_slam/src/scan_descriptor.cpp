@@ -189,13 +189,24 @@ ScanDescriptor computeDescriptor(const sim::LaserScan& scan, const DescriptorOpt
   for (std::size_t g = 0; g < 3; ++g)
     f[14 + g] = static_cast<double>(std::count_if(step.begin(), step.end(),
                                                   [&](double s) { return s > o.gap_distances[g]; }));
+  // Wall edges: consecutive points closer than the first gap distance, neither clamped to r_max.
+  std::vector<char> wall(pairs, 0);
+  for (std::size_t k = 0; k < pairs; ++k)
+    wall[k] = step[k] <= o.gap_distances[0] && !p[k].clamped && !p[next(k)].clamped ? 1 : 0;
   {
-    // Segments split at the first gap distance; a segment's length is the sum of its steps.
+    // Segments: maximal runs of wall edges; a segment's length is the sum of its steps. A 360° scan starts the
+    // walk after a break, so the segment across the seam is not split (cyclic-shift invariance).
+    std::size_t start = 0;
+    if (cyclic) {
+      const auto br = std::find(wall.begin(), wall.end(), 0);
+      start = br == wall.end() ? 0 : static_cast<std::size_t>(br - wall.begin()) + 1;
+    }
     std::vector<double> lengths;
     double cur = 0.0;
     bool open = false;
-    for (std::size_t k = 0; k < pairs; ++k) {
-      if (step[k] <= o.gap_distances[0] && !p[k].clamped && !p[next(k)].clamped) {
+    for (std::size_t m = 0; m < pairs; ++m) {
+      const std::size_t k = (start + m) % pairs;
+      if (wall[k]) {
         cur += step[k];
         open = true;
       } else if (open) {
@@ -205,10 +216,10 @@ ScanDescriptor computeDescriptor(const sim::LaserScan& scan, const DescriptorOpt
       }
     }
     if (open) lengths.push_back(cur);
-    double wall = 0.0;
-    for (double l : lengths) wall += l;
-    f[17] = lengths.empty() ? 0.0 : wall / static_cast<double>(lengths.size());
-    f[19] = wall;
+    double total = 0.0;
+    for (double l : lengths) total += l;
+    f[17] = lengths.empty() ? 0.0 : total / static_cast<double>(lengths.size());
+    f[19] = total;
   }
 
   // Polygon (the sensor origin closes it unless the scan covers 360°): area, perimeter, area centroid.
@@ -265,10 +276,9 @@ ScanDescriptor computeDescriptor(const sim::LaserScan& scan, const DescriptorOpt
     std::vector<double> curv;
     std::size_t straight = 0;
     const std::size_t triples = cyclic ? n : (n >= 2 ? n - 2 : 0);
-    auto wall = [&](std::size_t k) { return step[k] <= o.gap_distances[0] && !p[k].clamped && !p[next(k)].clamped; };
     for (std::size_t k = 0; k < triples && n >= 3; ++k) {
       const std::size_t k1 = next(k), k2 = next(k1);
-      if (!wall(k) || !wall(k1)) continue;
+      if (!wall[k] || !wall[k1]) continue;
       const double a = step[k], b = step[k1], c = dist(p[k], p[k2]);
       if (a * b * c < 1e-12) continue;
       const double cr = std::abs((p[k1].x - p[k].x) * (p[k2].y - p[k].y) - (p[k1].y - p[k].y) * (p[k2].x - p[k].x));
@@ -285,7 +295,7 @@ ScanDescriptor computeDescriptor(const sim::LaserScan& scan, const DescriptorOpt
     std::complex<double> z2{0.0, 0.0}, z4{0.0, 0.0};
     double wsum = 0.0;
     for (std::size_t k = 0; k < pairs; ++k) {
-      if (!wall(k)) continue;
+      if (!wall[k]) continue;
       const double ang = std::atan2(p[next(k)].y - p[k].y, p[next(k)].x - p[k].x);
       z2 += step[k] * std::polar(1.0, 2.0 * ang);
       z4 += step[k] * std::polar(1.0, 4.0 * ang);
@@ -306,7 +316,7 @@ double pearsonCorrelation(const std::vector<double>& a, const std::vector<double
   if (ma.sd <= 1e-15 || mb.sd <= 1e-15) return 0.0;
   double s = 0.0;
   for (std::size_t k = 0; k < a.size(); ++k) s += (a[k] - ma.mean) * (b[k] - mb.mean);
-  return std::clamp(s / (static_cast<double>(a.size()) * ma.sd * mb.sd), -1.0, 1.0);
+  return std::clamp(s / (static_cast<double>(a.size()) * (ma.sd * mb.sd)), -1.0, 1.0);  // symmetric in a, b
 }
 
 std::vector<double> pairFeatures(const ScanDescriptor& a, const ScanDescriptor& b) {

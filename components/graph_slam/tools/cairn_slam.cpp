@@ -32,7 +32,9 @@ constexpr const char* kUsage =
     "  KERNEL: none, huber, cauchy, gm (Geman-McClure), dcs (dynamic covariance scaling);\n"
     "          gnc[:C2] runs graduated non-convexity over the loop closures instead\n"
     "       cairn slam eval --relations <file> --poses <poses.txt> [--json] [--allow-missing]\n"
-    "                       [--stamp-tolerance S]   Kuemmerle et al. 2009 relative-pose error\n";
+    "                       [--stamp-tolerance S]   Kuemmerle et al. 2009 relative-pose error\n"
+    "       cairn slam train-verifier --logs a.log.gz[,b...] --out model.yml.gz [--weak-count 50] [--seed N] [--json]\n"
+    "       cairn slam eval-verifier --model model.yml.gz --logs c.log.gz [--threshold T] [--json]\n";
 
 int usageError(const std::string& what) {
   std::cerr << "cairn: slam: " << what << "\n" << kUsage;
@@ -195,5 +197,7 @@ int main(int argc, char** argv) {
   if (verb == "optimize") return optimizeVerb(args);
   if (verb == "run") return slamRunVerb(args);
   if (verb == "eval") return slamEvalVerb(args);
+  if (verb == "train-verifier") return trainVerifierVerb(args);
+  if (verb == "eval-verifier") return evalVerifierVerb(args);
   return usageError("unknown verb '" + verb + "'");
 }

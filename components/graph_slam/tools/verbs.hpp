@@ -7,3 +7,5 @@
 
 int slamRunVerb(const std::vector<std::string>& args);   // tools/slam_run.cpp
 int slamEvalVerb(const std::vector<std::string>& args);  // tools/slam_run.cpp
+int trainVerifierVerb(const std::vector<std::string>& args);  // tools/train_verifier.cpp: cairn slam train-verifier
+int evalVerifierVerb(const std::vector<std::string>& args);   // tools/train_verifier.cpp: cairn slam eval-verifier
