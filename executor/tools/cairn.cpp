@@ -57,6 +57,8 @@ Runtime (graph discovered through DDS built-in topics; non-cairn DDS participant
 Component tools (run as cairn-<verb>):
   slam optimize <in.g2o> ...           pose-graph optimization (components/graph_slam)
   sim bench --world <name> --json      simulator speed (components/sim)
+  log play <file.clf|.bz2|.gz> [--rate R] [--pace consumers] [--limit N] [--skip-malformed] [--print]
+                                       CARMEN log -> scan, odom, /tf, /clock over DDS (components/sim)
   people ...                           people detection and tracking (components/people_tracking)
   copa ...                             CoPA-Map people-activity model (components/copa_map)
   bt run <file.xml> ...                behavior trees (components/bt_executive)

@@ -49,7 +49,7 @@ class LogPlayer : public cairn::Node {
   std::unique_ptr<cairn::sim::LogPlayback> playback_;
   double rate_ = 1.0, start_delay_ = 0.0;
   bool loop_ = false, consumers_ = false;
-  std::size_t burst_ = 200, wait_subscribers_ = 0;
+  std::size_t burst_ = 200, wait_subscribers_ = 0, ack_window_ = 1, unacked_ = 0;
   std::chrono::nanoseconds tick_period_{10000000};
   std::string odom_frame_, base_frame_, laser_frame_;
   bool started_ = false, created_ = false, awaiting_ack_ = false;

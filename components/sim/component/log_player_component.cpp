@@ -27,6 +27,7 @@ LogPlayer::LogPlayer(const cairn::NodeOptions& o) : cairn::Node(o) {
   const double tick_hz = declare_parameter<double>("tick_rate", 100.0, D{"Hz, wall timer that publishes the records that fell due", 1.0, 1000.0, true});
   burst_ = static_cast<std::size_t>(declare_parameter<int64_t>("burst", 200, D{"most records per tick without wall-clock pacing", 1.0, 100000.0, true}));
   start_delay_ = declare_parameter<double>("start_delay", 0.0, D{"s of wall time before the first record (lets subscribers connect)", 0.0, 3600.0, true});
+  ack_window_ = static_cast<std::size_t>(declare_parameter<int64_t>("ack_window", 1, D{"pace consumers: records published before waiting for the acknowledgments (1 = each record after the previous one was acknowledged)", 1.0, 100000.0, true}));
   wait_subscribers_ = static_cast<std::size_t>(declare_parameter<int64_t>("wait_for_subscribers", 0, D{"start once scan has this many subscriptions (in and out of process)", 0.0, 1000.0, true}));
   odom_frame_ = declare_parameter<std::string>("odom_frame", "odom", D{"frame of odom", {}, {}, true});
   base_frame_ = declare_parameter<std::string>("base_frame", "base_link", D{"robot frame", {}, {}, true});
@@ -116,7 +117,8 @@ void LogPlayer::tick() {
       publish(*rec);
       playback_->pop();
       max_buffered_ = playback_->maxBuffered();
-      if (consumers_) {
+      if (consumers_ && ++unacked_ >= ack_window_) {
+        unacked_ = 0;
         awaiting_ack_ = true;
         if (!acknowledged(deadline)) return;
         awaiting_ack_ = false;

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <csignal>
+#include <sys/wait.h>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -17,6 +19,8 @@
 
 #include "cairn/container.hpp"
 #include "cairn/launch.hpp"
+#include "cairn/process.hpp"
+#include "log_player.hpp"
 #include "cairn/sim/carmen.hpp"
 #include "cairn/sim/simulator.hpp"
 #include "cairn_sim_msgs/msg/PersonArray.hpp"
@@ -452,6 +456,117 @@ TEST(LogPlayerComponent, PlaysTheAcesExcerptWithTheLogTimestamps) {
   }
   for (std::size_t i = 0; i < h.odom.size(); ++i) EXPECT_EQ(nanos(h.odom[i].header.stamp), odom_stamps[i]) << "odom " << i;
   EXPECT_EQ(h.odom[0].header.frame_id, "odom");
+}
+
+namespace {
+// Reference stamps (ns) of a log's laser and odometry records, in file order.
+void referenceStamps(const std::string& file, std::vector<int64_t>& scans, std::vector<int64_t>& odoms, std::size_t limit = 0) {
+  cairn::sim::CarmenReader r(file);
+  cairn::sim::CarmenRecord rec;
+  for (std::size_t n = 0; (limit == 0 || n < limit) && r.next(rec); ++n) {
+    const double t = cairn::sim::stampOf(rec);
+    builtin_interfaces::msg::Time m;
+    m.sec = static_cast<int32_t>(std::floor(t));
+    m.nanosec = static_cast<uint32_t>(std::round((t - std::floor(t)) * 1e9));
+    (std::holds_alternative<cairn::sim::CarmenLaser>(rec) ? scans : odoms).push_back(nanos(m));
+  }
+}
+
+// A reliable keep-all listener on scan, odom and /clock (everything acknowledged is kept).
+struct LogListener {
+  Listener ls{"log_listener_" + std::to_string(::getpid())};
+  std::mutex mu;
+  std::vector<int64_t> scans, odoms;
+  std::vector<double> clock;
+  std::shared_ptr<cairn::Subscription<sensor_msgs::msg::LaserScan>> scan_sub;
+  std::shared_ptr<cairn::Subscription<nav_msgs::msg::Odometry>> odom_sub;
+  std::shared_ptr<cairn::Subscription<rosgraph_msgs::msg::Clock>> clock_sub;
+  LogListener() {
+    const auto q = cairn::QoS{}.keep_all().reliable();
+    auto& n = *ls.node;
+    scan_sub = n.create_subscription<sensor_msgs::msg::LaserScan>("scan", q, [this](const sensor_msgs::msg::LaserScan& m) {
+      std::lock_guard l(mu);
+      scans.push_back(nanos(m.header.stamp));
+    });
+    odom_sub = n.create_subscription<nav_msgs::msg::Odometry>("odom", q, [this](const nav_msgs::msg::Odometry& m) {
+      std::lock_guard l(mu);
+      odoms.push_back(nanos(m.header.stamp));
+    });
+    clock_sub = n.create_subscription<rosgraph_msgs::msg::Clock>("/clock", q, [this](const rosgraph_msgs::msg::Clock& m) {
+      std::lock_guard l(mu);
+      clock.push_back(seconds(m.clock));
+    });
+    ls.start();
+  }
+};
+}  // namespace
+
+TEST(LogPlayerComponent, FullAcesLogPacedByItsConsumerWithBoundedMemory) {
+  // The whole ACES log (14749 records) over DDS, each record published only after the listener acknowledged the
+  // previous one: every message arrives, with the reader's stamps, while the player holds at most `lookahead`.
+  const std::string file = kRoot + "/../shared/data/slam_logs_carmen/radish/aces.clf.bz2";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+#ifndef CAIRN_SIM_HAVE_BZIP2
+  GTEST_SKIP() << "built without bzip2";
+#endif
+  std::vector<int64_t> scan_stamps, odom_stamps;
+  referenceStamps(file, scan_stamps, odom_stamps);
+  ASSERT_EQ(scan_stamps.size(), 7374u);
+  ASSERT_EQ(odom_stamps.size(), 7375u);
+
+  LogListener h;
+  Container c("aces_container");
+  cairn::LoadRequest req{"cairn_sim::LogPlayer", "log_player"};
+  req.parameters["file"] = file;
+  req.parameters["rate"] = 0.0;
+  req.parameters["pace"] = std::string("consumers");
+  req.parameters["lookahead"] = int64_t{16};
+  req.parameters["wait_for_subscribers"] = int64_t{1};
+  const auto loaded = c.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  const auto player = std::static_pointer_cast<cairn_sim::LogPlayer>(c.mgr.get(loaded.unique_id));
+  ASSERT_TRUE(waitFor([&] { return player->finished(); }, 100s)) << "played " << player->scansPublished();
+  EXPECT_FALSE(player->failed());
+  EXPECT_EQ(player->scansPublished(), 7374u);
+  EXPECT_EQ(player->odometryPublished(), 7375u);
+  EXPECT_LE(player->maxBufferedRecords(), 16u) << "memory grows with the log";
+  EXPECT_GE(player->maxBufferedRecords(), 1u);
+  ASSERT_TRUE(waitFor([&] {
+    std::lock_guard l(h.mu);
+    return h.scans.size() >= 7374 && h.odoms.size() >= 7375;
+  }, 30s));
+  std::lock_guard l(h.mu);
+  EXPECT_TRUE(h.scans == scan_stamps) << "scan stamps differ from the log";
+  EXPECT_TRUE(h.odoms == odom_stamps) << "odometry stamps differ from the log";
+  ASSERT_FALSE(h.clock.empty());
+  EXPECT_NEAR(h.clock.back(), std::max(scan_stamps.back(), odom_stamps.back()) * 1e-9, 1e-6);
+  EXPECT_TRUE(std::is_sorted(h.clock.begin(), h.clock.end()));
+}
+
+TEST(LogPlayCli, PublishesARecordLimitOverDdsAndExits) {
+  // `cairn log play` as a subprocess (it loads the LogPlayer component in-process): 300 records of the excerpt
+  // log, started once this test's subscription is matched, paced by its acknowledgments (20 records per
+  // acknowledgment round: across processes an acknowledgment takes one Cyclone heartbeat period, 100 ms).
+  std::string file = kRoot + "/../shared/data/slam_logs_carmen/radish/aces.clf.bz2";
+  std::size_t limit = 300;
+  if (!std::filesystem::exists(file)) file = kRoot + "/test/data/carmen/aces_corrected_head162.log.gz", limit = 120;
+  std::vector<int64_t> scan_stamps, odom_stamps;
+  referenceStamps(file, scan_stamps, odom_stamps, limit);
+  ASSERT_EQ(scan_stamps.size() + odom_stamps.size(), limit);
+  LogListener h;
+  const pid_t pid = cairn::spawn_process({CAIRN_LOG_EXE, "play", file, "--limit", std::to_string(limit), "--pace",
+                                          "consumers", "--wait-subscribers", "1", "-p", "ack_window:=20"});
+  int status = 0;
+  ASSERT_TRUE(waitFor([&] { return ::waitpid(pid, &status, WNOHANG) == pid; }, 60s)) << "cairn log play did not exit";
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << cairn::describe_wait_status(status);
+  ASSERT_TRUE(waitFor([&] {
+    std::lock_guard l(h.mu);
+    return h.scans.size() + h.odoms.size() >= limit;
+  }, 10s));
+  std::this_thread::sleep_for(100ms);
+  std::lock_guard l(h.mu);
+  EXPECT_TRUE(h.scans == scan_stamps);
+  EXPECT_TRUE(h.odoms == odom_stamps);
 }
 
 TEST(LogPlayerComponent, BadLogsAreLoadErrorsNamingFileAndLine) {
