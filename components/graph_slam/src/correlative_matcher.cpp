@@ -102,6 +102,14 @@ std::optional<MatchResult> correlativeMatch(const ProbabilityGrid& g, const std:
   const double inv_n = 1.0 / static_cast<double>(pts.size());
   double best_rank = -1.0;
   MatchResult best;
+  const bool penalize = w.translation_weight > 0.0 || w.rotation_weight > 0.0;
+  std::vector<double> trans_pen(acc.size());
+  for (int dy = 0; dy < side; ++dy) {
+    for (int dx = 0; dx < side; ++dx) {
+      trans_pen[static_cast<std::size_t>(dy) * static_cast<std::size_t>(side) + static_cast<std::size_t>(dx)] =
+          w.translation_weight * res * std::hypot(dx - n, dy - n);
+    }
+  }
   for (int a = 0; a < d.n_angles; ++a) {
     std::fill(acc.begin(), acc.end(), 0.0F);
     const CellIndex* cells = d.scan(a);
@@ -124,18 +132,19 @@ std::optional<MatchResult> correlativeMatch(const ProbabilityGrid& g, const std:
     const double rot_pen = w.rotation_weight * std::abs(dth);
     for (int dy = 0; dy < side; ++dy) {
       for (int dx = 0; dx < side; ++dx) {
-        const double score = acc[static_cast<std::size_t>(dy) * static_cast<std::size_t>(side) + static_cast<std::size_t>(dx)] * inv_n;
+        const std::size_t idx = static_cast<std::size_t>(dy) * static_cast<std::size_t>(side) + static_cast<std::size_t>(dx);
+        const double score = acc[idx] * inv_n;
+        if (score <= best_rank) continue;  // the penalty factor is <= 1: cannot win
         double rank = score;
-        if (w.translation_weight > 0.0 || w.rotation_weight > 0.0) {
-          const double pen = w.translation_weight * res * std::hypot(dx - n, dy - n) + rot_pen;
+        if (penalize) {
+          const double pen = trans_pen[idx] + rot_pen;
           rank = score * std::exp(-pen * pen);
+          if (rank <= best_rank) continue;
         }
-        if (rank > best_rank) {
-          best_rank = rank;
-          best.score = score;
-          best.pose.t = initial.t + res * Eigen::Vector2d(dx - n, dy - n);
-          best.pose.theta = normalizeAngle(d.angles[static_cast<std::size_t>(a)]);
-        }
+        best_rank = rank;
+        best.score = score;
+        best.pose.t = initial.t + res * Eigen::Vector2d(dx - n, dy - n);
+        best.pose.theta = normalizeAngle(d.angles[static_cast<std::size_t>(a)]);
       }
     }
   }
