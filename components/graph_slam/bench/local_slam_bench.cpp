@@ -22,13 +22,6 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-gs::Pose2 toPose(const sim::Pose2& p) {
-  gs::Pose2 q;
-  q.t = {p.x, p.y};
-  q.theta = p.theta;
-  return q;
-}
-
 struct Scan {
   double stamp;
   gs::Pose2 odom, mount;
@@ -116,7 +109,7 @@ int main(int argc, char** argv) {
     while (reader.next(rec)) {
       if (auto* l = std::get_if<sim::CarmenLaser>(&rec)) {
         if (!l->has_pose || l->message != "FLASER") continue;
-        const gs::Pose2 robot = toPose(l->robot_pose), laser = toPose(l->laser_pose);
+        const gs::Pose2 robot = gs::toPose2(l->robot_pose), laser = gs::toPose2(l->laser_pose);
         scans.push_back({l->scan.stamp, robot, gs::compose(gs::inverse(robot), laser), l->scan});
         if (max_scans && scans.size() >= max_scans) break;
       }

@@ -13,13 +13,6 @@ namespace sim = cairn::sim;
 
 namespace {
 
-gs::Pose2 toPose(const sim::Pose2& p) {
-  gs::Pose2 q;
-  q.t = {p.x, p.y};
-  q.theta = p.theta;
-  return q;
-}
-
 /// A ring of returns around the sensor (a round room of radius r with some bumps).
 gs::RangeData ring(double r, int n = 200) {
   gs::RangeData d;
@@ -145,12 +138,12 @@ TEST(LocalSlam, DriftsMuchLessThanOdometryOnASimulatedRun) {
   const SimRun run = simulate(45.0);
   ASSERT_GT(run.scans.size(), 300U);
   gs::LocalSlam slam;
-  const gs::Pose2 mount = toPose(sim::LaserConfig{}.mount);
+  const gs::Pose2 mount = gs::toPose2(sim::LaserConfig{}.mount);
   std::optional<gs::Pose2> first_truth, first_local, first_odom;
   double max_err_slam = 0, max_err_odom = 0, final_err_slam = 0, final_err_odom = 0;
   for (const auto& scan : run.scans) {
-    const gs::Pose2 odom = toPose(nearest(run.odom, scan.stamp).pose);
-    const gs::Pose2 truth = toPose(nearest(run.truth, scan.stamp).pose);
+    const gs::Pose2 odom = gs::toPose2(nearest(run.odom, scan.stamp).pose);
+    const gs::Pose2 truth = gs::toPose2(nearest(run.truth, scan.stamp).pose);
     auto r = slam.addScan(scan.stamp, gs::toRangeData(scan, mount, slam.options().filter), odom);
     ASSERT_TRUE(r) << slam.lastError();
     if (!first_truth) {

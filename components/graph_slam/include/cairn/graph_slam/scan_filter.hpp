@@ -60,6 +60,14 @@ std::vector<Eigen::Vector2d> voxelFilter(const std::vector<Eigen::Vector2d>& pts
 std::vector<Eigen::Vector2d> adaptiveVoxelFilter(const std::vector<Eigen::Vector2d>& pts,
                                                  const ScanFilterOptions& o);
 
+/// cairn::sim::Pose2 (x, y, theta) as a graph_slam Pose2 (odometry and laser mounts from sim / CARMEN logs).
+inline Pose2 toPose2(const sim::Pose2& p) {
+  Pose2 q;
+  q.t = Eigen::Vector2d(p.x, p.y);
+  q.theta = p.theta;
+  return q;
+}
+
 /// Applies `pose` (base in some frame) to points.
 std::vector<Eigen::Vector2d> transformPoints(const Pose2& pose, const std::vector<Eigen::Vector2d>& pts);
 
