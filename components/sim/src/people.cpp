@@ -512,8 +512,36 @@ void PeopleSimulator::update(double t) {
   if (crowd_) spawnCrowd(t_prev, t);
   started_ = true;
   if (social_.enabled && dt > 0) {
-    const int n = std::max(1, static_cast<int>(std::ceil(dt / social_.max_step - 1e-9)));
-    for (int k = 1; k <= n; ++k) socialStep(t_prev + dt * k / n, dt / n);
+    // Sub-steps only when two walkers (or a walker and the robot) can come within interaction_radius during
+    // this update; otherwise everybody follows the path exactly in one step (same result, much cheaper for
+    // long people-only runs).
+    double vmax = 0.0;
+    std::vector<std::size_t> near;
+    for (std::size_t i = 0; i < agents_.size(); ++i) {
+      const Agent& a = agents_[i];
+      if (followsPath(a, t) || (a.kind == Agent::Kind::Recorded && a.active)) {
+        near.push_back(i);
+        vmax = std::max(vmax, a.kind == Agent::Kind::Recorded ? norm(a.vel) : social_.max_speed_factor * a.speed);
+      }
+    }
+    const double reach = social_.interaction_radius + 2.0 * vmax * dt;
+    bool interact = false;
+    for (std::size_t u = 0; u < near.size() && !interact; ++u) {
+      const Vec2 p = agents_[near[u]].pos;
+      if (robot_radius_ > 0 && norm(p - robot_pos_) < reach) interact = true;
+      for (std::size_t v = u + 1; v < near.size() && !interact; ++v) interact = norm(p - agents_[near[v]].pos) < reach;
+    }
+    const bool recorded_near = std::any_of(near.begin(), near.end(), [&](std::size_t i) { return agents_[i].kind == Agent::Kind::Recorded; });
+    if (interact || recorded_near) {
+      const int n = std::max(1, static_cast<int>(std::ceil(dt / social_.max_step - 1e-9)));
+      for (int k = 1; k <= n; ++k) socialStep(t_prev + dt * k / n, dt / n);
+    } else {
+      for (auto& a : agents_) {
+        if (!followsPath(a, t)) continue;
+        moveAlongPath(a, std::min(dt, t - a.start_time));
+        a.vel = a.done ? Vec2{} : a.speed * Vec2{std::cos(a.heading), std::sin(a.heading)};
+      }
+    }
   }
   t_ = t;
   people_.clear();
