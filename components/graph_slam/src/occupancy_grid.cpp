@@ -11,7 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-// (toOccupancyGrid is defined once the probability grid lands)
+#include "cairn/graph_slam/probability_grid.hpp"
 
 namespace cairn::graph_slam {
 
@@ -40,6 +40,26 @@ cv::Mat toImage(const OccupancyGrid& g, const MapExportOptions& o) {
 }
 
 }  // namespace
+
+OccupancyGrid toOccupancyGrid(const ProbabilityGrid& grid) {
+  OccupancyGrid out;
+  out.resolution = grid.resolution();
+  CellIndex lo, hi;
+  if (!grid.knownBounds(lo, hi)) {
+    out.origin = grid.origin();
+    return out;
+  }
+  out.width = hi.x - lo.x + 1;
+  out.height = hi.y - lo.y + 1;
+  out.origin = grid.origin() + grid.resolution() * Eigen::Vector2d(lo.x, lo.y);
+  out.data.assign(static_cast<std::size_t>(out.width) * static_cast<std::size_t>(out.height), -1);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x)
+      if (grid.known(lo.x + x, lo.y + y))
+        out.data[static_cast<std::size_t>(y) * static_cast<std::size_t>(out.width) + static_cast<std::size_t>(x)] =
+            static_cast<std::int8_t>(std::lround(100.0 * grid.probability(lo.x + x, lo.y + y)));
+  return out;
+}
 
 void writeMapServer(const OccupancyGrid& grid, const std::string& stem, const MapExportOptions& options) {
   const std::string pgm = stem + ".pgm";

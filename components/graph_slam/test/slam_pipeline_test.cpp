@@ -7,10 +7,16 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <algorithm>
+#include <unistd.h>
+#include <sys/wait.h>
 #include <string>
 
 #include "cairn/graph_slam/occupancy_grid.hpp"
 #include "cairn/graph_slam/relations.hpp"
+#include "cairn/graph_slam/slam.hpp"
+#include "cairn/graph_slam/slam_params.hpp"
+#include "cairn/sim/simulator.hpp"
 #include "cairn/sim/world.hpp"
 
 namespace gs = cairn::graph_slam;
@@ -38,7 +44,241 @@ int runTool(const std::string& args, std::string& out) {
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 
+struct SimRun {
+  std::vector<cairn::sim::LaserScan> scans;
+  std::vector<cairn::sim::Odometry> odom, truth;
+};
+
+// Out along the office's main corridor and back (a loop in time: the return trip revisits every place), with
+// odometry that drifts in heading, so local SLAM alone ends metres off. Deterministic (seeded).
+SimRun simulateOutAndBack() {
+  namespace sim = cairn::sim;
+  const sim::World office = sim::loadWorld(sim::resolveWorldPath("office"));
+  sim::SimConfig cfg;
+  cfg.seed = 11;
+  cfg.people = false;
+  cfg.crowd = false;
+  cfg.odometry.scale_error = 0.03;
+  cfg.odometry.heading_drift = 0.03;  // rad/m
+  cfg.odometry.sigma_rot = 0.02;
+  cfg.laser.resolution = 1.0 * M_PI / 180.0;
+  sim::Simulator s(office, cfg);
+  s.followRoute({{2, 12.55}, {24, 12.55}, {2, 12.55}});
+  sim::SimOutput out;
+  s.advance(120.0, out);
+  return {out.scans, out.odometry, out.ground_truth};
+}
+
+const cairn::sim::Odometry& nearest(const std::vector<cairn::sim::Odometry>& v, double t) {
+  auto it = std::lower_bound(v.begin(), v.end(), t, [](const cairn::sim::Odometry& o, double s) { return o.stamp < s; });
+  if (it == v.end()) return v.back();
+  if (it != v.begin() && std::abs((it - 1)->stamp - t) < std::abs(it->stamp - t)) --it;
+  return *it;
+}
+
+gs::Pose2 toGs(const cairn::sim::Pose2& p) { return gs::Pose2{{p.x, p.y}, p.theta}; }
+
+// Feeds scans [begin, end) to the SLAM with odometry.
+void feed(gs::GraphSlam& slam, const SimRun& run, std::size_t begin, std::size_t end) {
+  for (std::size_t i = begin; i < end && i < run.scans.size(); ++i)
+    slam.addScan(run.scans[i], toGs(nearest(run.odom, run.scans[i].stamp).pose));
+}
+
+// Position error of the last pose against ground truth, after aligning the first poses (the run ends where it
+// started, so this is what the loop closes).
+double finalError(const std::vector<gs::StampedPose>& traj, const SimRun& run) {
+  if (traj.empty()) return 1e9;
+  const gs::Pose2 t0 = toGs(nearest(run.truth, traj.front().stamp).pose);
+  const gs::Pose2 align = gs::compose(t0, gs::inverse(traj.front().pose));
+  const gs::Pose2 est = gs::compose(align, traj.back().pose);
+  return (est.t - toGs(nearest(run.truth, traj.back().stamp).pose).t).norm();
+}
+
+gs::SlamOptions simOptions() {
+  gs::SlamOptions o;
+  o.use_verifier = false;  // the shipped model is trained on 180° real scans; this is a 360° simulated laser
+  o.loop_min_time_gap = 10.0;
+  o.local.scans_per_submap = 30;  // ~6 m submaps: the 50 m run finishes several
+  return o;
+}
+
+const SimRun& outAndBack() {
+  static const SimRun run = simulateOutAndBack();
+  return run;
+}
+
 }  // namespace
+
+TEST(GraphSlam, ClosesASimulatedLoopAndEndsCloserToTheTruthThanWithout) {
+  const SimRun& run = outAndBack();
+  ASSERT_GT(run.scans.size(), 500u);
+  gs::SlamOptions no_loops = simOptions();
+  no_loops.loop_closure = false;
+  gs::GraphSlam open(no_loops);
+  feed(open, run, 0, run.scans.size());
+  open.finish();
+  gs::GraphSlam closed(simOptions());
+  feed(closed, run, 0, run.scans.size());
+  closed.finish();
+  const double err_open = finalError(open.trajectory(), run);
+  const double err_closed = finalError(closed.trajectory(), run);
+  EXPECT_GT(closed.stats().loops_accepted, 0u);
+  EXPECT_EQ(closed.inconsistentLoops(), 0u);
+  EXPECT_GT(closed.stats().loops_rejected + closed.stats().loop_matches, closed.stats().loops_accepted);
+  std::printf("final position error: open loop %.3f m, closed %.3f m\n", err_open, err_closed);
+  EXPECT_LT(err_closed, 0.3) << "open-loop error " << err_open;  // open loop: 0.40 m with this seed
+  EXPECT_LT(err_closed, err_open);
+  // Every scan has a pose, stamps in order.
+  const auto traj = closed.trajectory();
+  EXPECT_EQ(traj.size(), run.scans.size());
+  for (std::size_t i = 1; i < traj.size(); ++i) EXPECT_LE(traj[i - 1].stamp, traj[i].stamp);
+  // The map has the corridor: known cells, occupied and free.
+  const gs::OccupancyGrid map = closed.map();
+  EXPECT_GT(map.knownCells(), 5000u);
+}
+
+TEST(GraphSlam, SaveLoadRoundTripAndBrokenFilesGiveClearErrors) {
+  const SimRun& run = outAndBack();
+  gs::GraphSlam slam(simOptions());
+  feed(slam, run, 0, run.scans.size() / 2);
+  slam.finish();
+  const fs::path d = tempDir("saveload");
+  const std::string path = (d / "state.cslam").string();
+  slam.save(path);
+  gs::GraphSlam loaded = gs::GraphSlam::load(path, simOptions());
+  ASSERT_EQ(loaded.nodes().size(), slam.nodes().size());
+  ASSERT_EQ(loaded.edges().size(), slam.edges().size());
+  ASSERT_EQ(loaded.submaps().size(), slam.submaps().size());
+  const auto a = slam.trajectory(), b = loaded.trajectory();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].stamp, b[i].stamp);
+    EXPECT_NEAR((a[i].pose.t - b[i].pose.t).norm(), 0.0, 1e-9);
+  }
+  const gs::OccupancyGrid ma = slam.map(), mb = loaded.map();
+  EXPECT_EQ(ma.width, mb.width);
+  EXPECT_EQ(ma.height, mb.height);
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < std::min(ma.data.size(), mb.data.size()); ++i) differ += ma.data[i] != mb.data[i];
+  EXPECT_LT(differ, ma.data.size() / 1000);  // points are stored as float: a cell boundary may flip
+  EXPECT_FALSE(loaded.localized());  // a new session must find itself in the map first
+
+  std::string bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  auto expectError = [&](const std::string& content, const std::string& needle) {
+    const std::string p = (d / "broken.cslam").string();
+    std::ofstream(p, std::ios::binary) << content;
+    try {
+      gs::GraphSlam::load(p, simOptions());
+      ADD_FAILURE() << "loading should fail with '" << needle << "'";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("broken.cslam"), std::string::npos) << e.what();
+    }
+  };
+  expectError(bytes.substr(0, bytes.size() / 2), "checksum");
+  expectError(bytes.substr(0, 10), "truncated");
+  std::string other = bytes;
+  other[8] = 2;  // format version 2
+  expectError(other, "version 2");
+  expectError("hello world, not a map", "not a cairn SLAM state file");
+  EXPECT_THROW(gs::GraphSlam::load((d / "missing.cslam").string(), simOptions()), std::runtime_error);
+}
+
+TEST(GraphSlam, LocalizesOnALoadedMapWithoutGrowingIt) {
+  const SimRun& run = outAndBack();
+  gs::GraphSlam mapping(simOptions());
+  const std::size_t half = run.scans.size() / 2;
+  feed(mapping, run, 0, half);
+  mapping.finish();
+  const fs::path d = tempDir("localize");
+  mapping.save((d / "map.cslam").string());
+  gs::SlamOptions o = simOptions();
+  o.localization_only = true;
+  gs::GraphSlam loc = gs::GraphSlam::load((d / "map.cslam").string(), o);
+  const std::size_t nodes = loc.nodes().size();
+  // The return trip, started without a pose guess: a global search must place it, then it tracks.
+  feed(loc, run, half, run.scans.size());
+  EXPECT_TRUE(loc.localized());
+  EXPECT_EQ(loc.nodes().size(), nodes);
+  // Compare the last pose with the truth in the map's frame (map frame = truth aligned at the first scan).
+  const auto map_traj = mapping.trajectory();
+  const gs::Pose2 t0 = toGs(nearest(run.truth, map_traj.front().stamp).pose);
+  const gs::Pose2 align = gs::compose(t0, gs::inverse(map_traj.front().pose));
+  const gs::Pose2 est = gs::compose(align, loc.currentPose());
+  const gs::Pose2 truth = toGs(nearest(run.truth, run.scans.back().stamp).pose);
+  EXPECT_LT((est.t - truth.t).norm(), 0.3);
+}
+
+TEST(SlamParams, TableSetsTypedValuesAndRejectsBadOnes) {
+  gs::SlamOptions o;
+  gs::setSlamParameter(o, "r_min", "4.5");
+  EXPECT_EQ(o.r_min, 4.5);
+  gs::setSlamParameter(o, "loop_node_stride", "5");
+  EXPECT_EQ(o.loop_node_stride, 5);
+  gs::setSlamParameter(o, "use_verifier", "false");
+  EXPECT_FALSE(o.use_verifier);
+  gs::setSlamParameter(o, "filter.max_range", "25");
+  EXPECT_EQ(o.local.filter.max_range, 25.0);
+  EXPECT_THROW(gs::setSlamParameter(o, "no_such_key", "1"), std::invalid_argument);
+  EXPECT_THROW(gs::setSlamParameter(o, "r_min", "abc"), std::invalid_argument);
+  EXPECT_THROW(gs::setSlamParameter(o, "loop_min_score", "1.5"), std::invalid_argument);
+  EXPECT_THROW(gs::setSlamParameter(o, "loop_node_stride", "2.5"), std::invalid_argument);
+  EXPECT_THROW(gs::setSlamParameter(o, "use_verifier", "maybe"), std::invalid_argument);
+  for (const auto& p : gs::slamParameters()) EXPECT_FALSE(gs::slamParameterText(gs::SlamOptions{}, p).empty() && p.name != "verifier_model") << p.name;
+  gs::SlamOptions bad;
+  bad.loop_kernel = "wobbly:1";
+  EXPECT_THROW(gs::GraphSlam{bad}, std::invalid_argument);
+}
+
+TEST(SlamTool, RunOnAnAcesExcerptMeetsTheRelationsBound) {
+  const std::string log = std::string(CAIRN_SOURCE_ROOT) + "/../shared/data/slam_logs_carmen/radish/aces.clf.bz2";
+  const std::string rel = std::string(CAIRN_SOURCE_ROOT) + "/../shared/data/slam_logs_carmen/radish/aces.relations";
+  if (!fs::exists(log)) GTEST_SKIP() << "shared data not present: " << log;
+  const fs::path d = tempDir("aces");
+  std::string out;
+  ASSERT_EQ(runTool("run --carmen " + log + " --out " + d.string() + " --limit 1200 --quiet --json", out), 0) << out;
+  EXPECT_NE(out.find("\"scans\":1200"), std::string::npos) << out;
+  for (const char* f : {"poses.txt", "graph.g2o", "map.pgm", "map.yaml", "map.png", "state.cslam", "summary.json"})
+    EXPECT_TRUE(fs::exists(d / f)) << f;
+  const auto poses = gs::readPoses((d / "poses.txt").string());
+  EXPECT_EQ(poses.size(), 1200u);
+  const gs::RelationsResult r = gs::evaluateRelations(gs::readRelations(rel), poses);
+  ASSERT_GT(r.used, 150u);
+  // Cartographer's whole-log figures are 0.0375 m / 0.373° (Hess et al. 2016, Table II); this excerpt has no
+  // loop, so the bound is the local accuracy with margin.
+  EXPECT_LT(r.trans_mean, 0.05);
+  EXPECT_LT(r.rot_mean * 180.0 / M_PI, 0.5);
+  ASSERT_EQ(runTool("eval --allow-missing --json --relations " + rel + " --poses " + (d / "poses.txt").string(), out), 0) << out;
+  EXPECT_NE(out.find("\"used\":" + std::to_string(r.used)), std::string::npos) << out;
+}
+
+TEST(SlamTool, RunRejectsBadInputWithOneLine) {
+  const fs::path d = tempDir("badrun");
+  std::string out;
+  EXPECT_EQ(runTool("run --carmen " + (d / "missing.clf").string() + " --out " + d.string(), out), 2);
+  EXPECT_NE(out.find("missing.clf"), std::string::npos) << out;
+  EXPECT_EQ(runTool("run --out " + d.string(), out), 2);
+  writeText(d / "bad.yaml", "r_min: 3\nno_such_key: 1\n");
+  const std::string log = std::string(CAIRN_SOURCE_ROOT) + "/test/data/carmen/aces_head60.clf";
+  EXPECT_EQ(runTool("run --carmen " + log + " --out " + d.string() + " --config " + (d / "bad.yaml").string(), out), 2);
+  EXPECT_NE(out.find("bad.yaml:2:"), std::string::npos) << out;
+  EXPECT_EQ(runTool("run --carmen " + log + " --out " + d.string() + " --set r_min=abc", out), 2);
+  EXPECT_NE(out.find("r_min"), std::string::npos) << out;
+  // A log that ends mid-line: an error naming file:line, or with --skip-malformed a finished run.
+  std::ifstream in(log);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  const auto cut = text.rfind("FLASER");
+  ASSERT_NE(cut, std::string::npos);
+  writeText(d / "cut.clf", text.substr(0, cut + 40));
+  EXPECT_EQ(runTool("run --quiet --carmen " + (d / "cut.clf").string() + " --out " + (d / "o1").string(), out), 2);
+  EXPECT_NE(out.find("cut.clf:"), std::string::npos) << out;
+  EXPECT_EQ(runTool("run --quiet --skip-malformed --carmen " + (d / "cut.clf").string() + " --out " + (d / "o2").string(), out), 0) << out;
+  EXPECT_TRUE(fs::exists(d / "o2" / "poses.txt"));
+}
 
 TEST(Relations, PerfectTrajectoryHasZeroErrorAndKnownPerturbationIsMeasured) {
   // A trajectory on a circle; relations between every pair 5 apart, taken from the truth.

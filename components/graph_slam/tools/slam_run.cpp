@@ -1,12 +1,25 @@
 // `cairn slam run` (offline SLAM on a CARMEN log) and `cairn slam eval` (Kümmerle et al. 2009 relations metric).
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <optional>
 #include <iostream>
 #include <string>
 #include <vector>
 
+#include "cairn/graph_slam/g2o_io.hpp"
+#include "cairn/graph_slam/occupancy_grid.hpp"
 #include "cairn/graph_slam/relations.hpp"
+#include "cairn/graph_slam/slam.hpp"
+#include "cairn/graph_slam/slam_params.hpp"
+#include "cairn/sim/carmen.hpp"
 #include "cairn/sim/world.hpp"  // InputError
+#include <yaml-cpp/yaml.h>
+
 #include "cli_util.hpp"
 #include "verbs.hpp"
 
@@ -83,6 +96,196 @@ int slamEvalVerb(const std::vector<std::string>& args) {
   }
 }
 
-int slamRunVerb(const std::vector<std::string>&) {
-  return fail("run: not available yet in this build");
+namespace {
+
+// Applies a flat `key: value` YAML config (keys of slamParameters()); errors name file:line and the key.
+void applyConfig(const std::string& path, gs::SlamOptions& options) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw cairn::sim::InputError(path, 0, "cannot open file");
+  } catch (const YAML::Exception& e) {
+    throw cairn::sim::InputError(path, e.mark.line + 1, e.msg);
+  }
+  if (root.IsNull()) return;
+  if (!root.IsMap()) throw cairn::sim::InputError(path, root.Mark().line + 1, "expected a map of SLAM parameters");
+  for (const auto& kv : root) {
+    const std::string key = kv.first.as<std::string>();
+    if (!kv.second.IsScalar())
+      throw cairn::sim::InputError(path, kv.second.Mark().line + 1, key + ": expected a scalar value");
+    try {
+      gs::setSlamParameter(options, key, kv.second.Scalar());
+    } catch (const std::invalid_argument& e) {
+      throw cairn::sim::InputError(path, kv.first.Mark().line + 1, e.what());
+    }
+  }
+}
+
+struct LogScan {
+  std::size_t lasers = 0;
+  std::optional<gs::Pose2> mount;  ///< laser in base frame from the first FLASER with poses
+};
+
+// First pass over the log: the scan count (progress/ETA) and the laser mount. FLASER carries the laser pose
+// and the robot's odometry pose; their difference is the mount (FR079: 4 cm forward). Ignored if implausible.
+LogScan scanLog(const std::string& log, const cairn::sim::CarmenReaderOptions& opt) {
+  cairn::sim::CarmenReader reader(log, opt);
+  cairn::sim::CarmenRecord rec;
+  LogScan out;
+  while (reader.next(rec)) {
+    const auto* laser = std::get_if<cairn::sim::CarmenLaser>(&rec);
+    if (laser == nullptr) continue;
+    if (out.lasers++ == 0 && laser->has_pose) {
+      const gs::Pose2 robot{{laser->robot_pose.x, laser->robot_pose.y}, laser->robot_pose.theta};
+      const gs::Pose2 las{{laser->laser_pose.x, laser->laser_pose.y}, laser->laser_pose.theta};
+      const gs::Pose2 mount = gs::compose(gs::inverse(robot), las);
+      if (mount.t.norm() < 1.0 && std::abs(mount.theta) < 0.1) out.mount = mount;
+    }
+  }
+  return out;
+}
+
+void progress(std::size_t done, std::size_t total, double elapsed) {
+  const double f = total > 0 ? static_cast<double>(done) / static_cast<double>(total) : 1.0;
+  const int width = 30;
+  const int filled = static_cast<int>(f * width);
+  const double eta = f > 0 ? elapsed * (1.0 - f) / f : 0.0;
+  std::fprintf(stderr, "\r[%.*s%*s] %5.1f%%  %zu/%zu scans  %.0f s elapsed, ETA %.0f s ", filled,
+               "##############################", width - filled, "", 100.0 * f, done, total, elapsed, eta);
+  std::fflush(stderr);
+}
+
+}  // namespace
+
+int slamRunVerb(const std::vector<std::string>& args) {
+  std::string log, out_dir, config, load_path;
+  bool json = false, quiet = false, skip_malformed = false;
+  long limit = -1;
+  std::string laser_mount = "auto";
+  gs::SlamOptions options;
+  try {
+    std::vector<std::pair<std::string, std::string>> sets;
+    for (std::size_t i = 0; i < args.size(); ++i) {
+      const std::string& a = args[i];
+      auto value = [&]() -> const std::string& {
+        if (i + 1 >= args.size()) throw std::invalid_argument(a + " needs a value");
+        return args[++i];
+      };
+      if (a == "--carmen") log = value();
+      else if (a == "--out") out_dir = value();
+      else if (a == "--config") config = value();
+      else if (a == "--load") load_path = value();
+      else if (a == "--set") {
+        const std::string& kv = value();
+        const auto eq = kv.find('=');
+        if (eq == std::string::npos) throw std::invalid_argument("--set expects key=value, got '" + kv + "'");
+        sets.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
+      } else if (a == "--limit") limit = cairn::slam_cli::parseInt(value(), "--limit");
+      else if (a == "--laser-mount") laser_mount = value();
+      else if (a == "--skip-malformed") skip_malformed = true;
+      else if (a == "--json") json = true;
+      else if (a == "--quiet") quiet = true;
+      else throw std::invalid_argument("run: unknown option '" + a + "'");
+    }
+    if (log.empty() || out_dir.empty()) throw std::invalid_argument("run needs --carmen <log> and --out <dir>");
+    if (laser_mount != "auto" && laser_mount != "zero") throw std::invalid_argument("--laser-mount must be auto or zero");
+    if (!config.empty()) applyConfig(config, options);
+    for (const auto& [k, v] : sets) gs::setSlamParameter(options, k, v);
+  } catch (const std::exception& e) {
+    return fail(e.what());
+  }
+  try {
+    std::filesystem::create_directories(out_dir);
+    cairn::sim::CarmenReaderOptions ropt;
+    ropt.skip_malformed = skip_malformed;
+    std::size_t malformed_warnings = 0;
+    ropt.on_warning = [&](const cairn::sim::InputError& w) {
+      if (malformed_warnings++ < 5) std::fprintf(stderr, "\ncairn: slam: skipping %s\n", w.what());
+    };
+    const auto t0 = std::chrono::steady_clock::now();
+    const LogScan info = scanLog(log, ropt);
+    malformed_warnings = 0;
+    std::size_t total = info.lasers;
+    if (limit >= 0) total = std::min(total, static_cast<std::size_t>(limit));
+    if (laser_mount == "auto" && info.mount) options.sensor_in_base = *info.mount;
+    gs::GraphSlam slam = load_path.empty() ? gs::GraphSlam(options) : gs::GraphSlam::load(load_path, options);
+    cairn::sim::CarmenReader reader(log, ropt);
+    cairn::sim::CarmenRecord rec;
+    std::size_t done = 0, rejected = 0;
+    double first_stamp = std::numeric_limits<double>::quiet_NaN(), last_stamp = first_stamp;
+    auto last_print = t0;
+    while (done < total && reader.next(rec)) {
+      auto* laser = std::get_if<cairn::sim::CarmenLaser>(&rec);
+      if (laser == nullptr) continue;
+      ++done;
+      std::optional<gs::Pose2> odom;
+      if (laser->has_pose) odom = gs::Pose2{{laser->robot_pose.x, laser->robot_pose.y}, laser->robot_pose.theta};
+      if (std::isnan(first_stamp)) first_stamp = laser->scan.stamp;
+      last_stamp = laser->scan.stamp;
+      if (!slam.addScan(laser->scan, odom)) ++rejected;
+      const auto now = std::chrono::steady_clock::now();
+      if (!quiet && (now - last_print > std::chrono::milliseconds(250) || done == total)) {
+        progress(done, total, std::chrono::duration<double>(now - t0).count());
+        last_print = now;
+      }
+    }
+    slam.finish();
+    const double runtime = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!quiet) std::fprintf(stderr, "\n");
+    if (done == 0) return fail(log + ": no laser scans");
+    const std::filesystem::path dir(out_dir);
+    gs::writePoses((dir / "poses.txt").string(), slam.trajectory());
+    gs::writeG2o(slam.graph(), (dir / "graph.g2o").string());
+    const gs::OccupancyGrid map = slam.map();
+    gs::writeMapServer(map, (dir / "map").string());
+    std::vector<gs::Pose2> path, loops;
+    for (const auto& n : slam.nodes()) path.push_back(n.global_pose);
+    for (const auto& e : slam.edges())
+      if (e.kind == gs::EdgeKind::kLoop) loops.push_back(slam.nodes()[static_cast<std::size_t>(e.to)].global_pose);
+    gs::writeMapPng(map, path, (dir / "map.png").string(), loops);
+    slam.save((dir / "state.cslam").string());
+    const gs::SlamStats& st = slam.stats();
+    const double duration = last_stamp - first_stamp;
+    JsonObject j;
+    j.str("log", log)
+        .integer("scans", static_cast<long long>(done))
+        .integer("scans_rejected", static_cast<long long>(rejected))
+        .integer("nodes", static_cast<long long>(st.nodes))
+        .integer("submaps", static_cast<long long>(st.submaps))
+        .integer("loop_searches", static_cast<long long>(st.loop_searches))
+        .integer("loop_candidates", static_cast<long long>(st.loop_candidates))
+        .integer("verifier_rejected", static_cast<long long>(st.verifier_rejected))
+        .integer("loop_matches", static_cast<long long>(st.loop_matches))
+        .integer("loops_accepted", static_cast<long long>(st.loops_accepted))
+        .integer("loops_rejected", static_cast<long long>(st.loops_rejected))
+        .integer("loops_inconsistent", static_cast<long long>(slam.inconsistentLoops()))
+        .integer("optimizations", static_cast<long long>(st.optimizations))
+        .num("data_duration_s", duration)
+        .num("runtime_s", runtime)
+        .num("real_time_factor", runtime > 0 ? duration / runtime : 0.0)
+        .num("local_time_s", st.local_time_s)
+        .num("loop_time_s", st.loop_time_s)
+        .num("optimize_time_s", st.optimize_time_s)
+        .integer("map_width", map.width)
+        .integer("map_height", map.height)
+        .num("map_resolution", map.resolution);
+    {
+      std::ofstream s(dir / "summary.json");
+      s << j.text() << "\n";
+    }
+    if (json) {
+      std::cout << j.text() << "\n";
+    } else {
+      std::printf("%zu scans, %zu nodes, %zu loops accepted (%zu inconsistent), %.1f s for %.1f s of data (%.1fx real time)\n",
+                  done, st.nodes, st.loops_accepted, slam.inconsistentLoops(), runtime, duration,
+                  runtime > 0 ? duration / runtime : 0.0);
+      std::printf("wrote %s/{poses.txt,graph.g2o,map.pgm,map.yaml,map.png,state.cslam,summary.json}\n", out_dir.c_str());
+    }
+    return 0;
+  } catch (const cairn::sim::InputError& e) {
+    return fail(e.what());
+  } catch (const std::exception& e) {
+    return fail(e.what());
+  }
 }

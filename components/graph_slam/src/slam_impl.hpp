@@ -1,0 +1,103 @@
+// Private state of GraphSlam, shared by src/slam.cpp (pipeline) and src/slam_io.cpp (save/load).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "cairn/graph_slam/correlative_matcher.hpp"
+#include "cairn/graph_slam/local_slam.hpp"
+#include "cairn/graph_slam/loop_verifier.hpp"
+#include "cairn/graph_slam/optimizer.hpp"
+#include "cairn/graph_slam/slam.hpp"
+
+namespace cairn::graph_slam {
+
+/// What a loop search matches: a node of the graph, or (localization) the current scan.
+struct LoopQuery {
+  int trajectory = 0;
+  double stamp = 0.0;
+  Pose2 global_guess;
+  Pose2 local_pose;  ///< query base in its trajectory's local frame
+  const std::vector<Eigen::Vector2d>* points = nullptr;  ///< base frame
+  const ScanDescriptor* descriptor = nullptr;
+  std::int64_t node = -1;  ///< -1 for a localization query
+  int own_submap = -1;     ///< submaps never matched (the query's own)
+};
+
+/// A geometric match of a query against a candidate's submap: pose of the query in candidate node k's frame.
+struct LoopMatch {
+  std::int64_t target = 0;  ///< candidate node k
+  int submap = 0;
+  Pose2 z;                  ///< query base in the frame of k
+  Eigen::Matrix3d information = Eigen::Matrix3d::Identity();
+  double score = 0.0;
+  Pose2 implied_query_global;  ///< global(k) ∘ z
+  Pose2 implied_map_to_local;  ///< the query trajectory's local frame in the map frame, as this match implies
+  std::int64_t query = -1;     ///< query node (-1: localization query)
+};
+
+struct SubmapCache {
+  std::unique_ptr<BranchAndBoundMatcher> bnb;  ///< built when first matched (finished submaps only)
+  std::vector<float> distance;                 ///< m to the nearest occupied cell, grid layout; empty until needed
+};
+
+struct GraphSlam::Impl {
+  explicit Impl(SlamOptions o);
+
+  SlamOptions options;
+  std::optional<LoopVerifier> verifier;
+  DescriptorOptions descriptor_options;
+  std::unique_ptr<LocalSlam> local;
+  int trajectory = 0;
+  int submap_base = 0;  ///< submaps() index of the current LocalSlam's submap 0
+  std::optional<std::int64_t> last_node;  ///< newest node of the current trajectory
+  Pose2 map_to_local;                     ///< current trajectory's local frame in the map frame
+  bool linked = true;                     ///< current trajectory connected to the rest of the map
+  int links = 0;                          ///< verified links of the current trajectory to older ones
+  std::vector<LoopMatch> pending_global;  ///< unverified global detections (Stüde n_ver rule)
+  std::vector<LoopMatch> pending_local;   ///< local matches waiting for loop_confirmations agreeing ones
+  RobustKernel loop_kernel;
+  std::size_t loaded_nodes = 0;           ///< nodes that came from load() (working memory of earlier sessions)
+
+  std::vector<SlamNode> nodes;  ///< node id == index
+  std::vector<SlamSubmap> submaps;
+  std::vector<SubmapCache> caches;
+  std::vector<SlamEdge> edges;
+  std::vector<ScanRecord> records;
+  std::vector<StampedPose> localization_poses;  ///< localization mode: poses of scans (no nodes)
+  PoseGraph graph;
+  Optimizer optimizer;
+  SlamStats stats;
+  std::string last_error;
+  Eigen::Matrix3d cov_since_loop = Eigen::Matrix3d::Zero();
+  int nodes_since_optimize = 0;
+  Pose2 current_pose;
+  std::optional<Pose2> initial_pose;  ///< applied at the next scan (setInitialPose)
+  void applyInitialPose(const Pose2& local_pose);
+
+  // pipeline (slam.cpp)
+  std::optional<ScanUpdate> addScan(const sim::LaserScan& scan, const std::optional<Pose2>& odom);
+  std::int64_t addNode(const LocalResult& r, const sim::LaserScan& scan);
+  void syncSubmaps(const LocalResult& r, std::int64_t node);
+  int searchLoops(std::int64_t node);
+  std::vector<LoopMatch> localSearch(const LoopQuery& q, double radius, double verifier_threshold);
+  std::vector<LoopMatch> confirmLocal(const std::vector<LoopMatch>& fresh);
+  std::vector<LoopMatch> globalSearch(const LoopQuery& q);
+  std::optional<LoopMatch> matchSubmap(const LoopQuery& q, std::int64_t target, const SearchWindow* window,
+                                       double min_score);
+  bool verifyGlobal(const std::vector<LoopMatch>& fresh, std::vector<LoopMatch>& agreeing);
+  void addLoopEdge(std::int64_t node, const LoopMatch& m);
+  void localizeScan(const LocalResult& r, const sim::LaserScan& scan, ScanUpdate& update);
+  SubmapCache& cache(int submap);
+  OptimizerSummary optimize();
+  void startTrajectory();
+  double searchRadius() const;
+};
+
+/// SE(2) compounding Jacobians of c = a ∘ b w.r.t. a and b (additive x, y, θ parametrization).
+void composeJacobians(const Pose2& a, const Pose2& b, Eigen::Matrix3d& ja, Eigen::Matrix3d& jb);
+
+}  // namespace cairn::graph_slam
