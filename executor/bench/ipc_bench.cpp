@@ -8,7 +8,8 @@
 //                 two processes over DDS, round trip 12 B / 1 KiB / 64 KiB / 1 MiB, callbacks on executor
 //                 threads (default) or in an Immediate callback group (on Cyclone's receive thread);
 //                 baseline: ddsperf ping/pong (cyclonedds-tools) in waitset resp. listener mode, same sizes.
-//   dds_throughput 1 KiB reliable flood to another process; baseline: ddsperf pub/sub.
+//   dds_throughput 1 KiB reliable keep-all flood to another process, with write batching as ddsperf's pub
+//                 (and dds_throughput_unbatched: one datagram per sample); baseline: ddsperf pub/sub.
 // Latencies are one-way: half the round trip for dds_rtt, as ddsperf prints them.
 #include <sys/wait.h>
 #include <unistd.h>
@@ -340,11 +341,28 @@ void dds_rtt(const std::string& self, std::size_t size, double seconds, bool imm
   std::condition_variable cv;
   bool got = false;
   std::unique_ptr<Image> back;
+  std::vector<double> half_rtt;
+  half_rtt.reserve(1 << 20);
+  // Immediate mode, as ddsperf's listener-mode ping: the callback that receives a pong sends the next ping
+  // right there on Cyclone's receive thread (no thread wakes up on the ping side).
+  std::atomic<bool> chain{false}, record{false};
+  std::atomic<long> rounds{0};
+  Clock::time_point t0;  // written and read by the receive thread only while chaining
   auto group = node.create_callback_group(immediate ? cairn::CallbackGroup::Type::Immediate
                                                     : cairn::CallbackGroup::Type::MutuallyExclusive);
   auto sub = node.create_subscription<Image>(
       "bench/pong", q,
       [&](std::unique_ptr<Image> m) {
+        if (chain.load(std::memory_order_acquire)) {
+          const auto now = Clock::now();
+          if (record.load(std::memory_order_relaxed)) {
+            half_rtt.push_back(std::chrono::duration<double, std::nano>(now - t0).count() / 2);
+          }
+          rounds.fetch_add(1, std::memory_order_relaxed);
+          t0 = Clock::now();
+          pub->publish(std::move(m));
+          return;
+        }
         std::lock_guard l(mu);
         back = std::move(m);
         got = true;
@@ -355,8 +373,7 @@ void dds_rtt(const std::string& self, std::size_t size, double seconds, bool imm
   exec.spin_until([&] { return pub->inter_process_subscription_count() > 0 && sub->publisher_count_inter_process() > 0; }, 20s);
   auto msg = std::make_unique<Image>();
   msg->data.resize(size);
-  std::vector<double> half_rtt;
-  const auto run = [&](double secs, bool record) {
+  const auto run = [&](double secs, bool rec) {
     const auto end = Clock::now() + std::chrono::milliseconds(int64_t(secs * 1000));
     while (Clock::now() < end) {
       {
@@ -365,25 +382,50 @@ void dds_rtt(const std::string& self, std::size_t size, double seconds, bool imm
       }
       const auto t0 = Clock::now();
       pub->publish(std::move(msg));
-      bool ok;
-      if (immediate) {
-        std::unique_lock l(mu);
-        ok = cv.wait_for(l, 2s, [&] { return got; });
-      } else {
-        ok = exec.spin_until([&] { return got; }, 2s);
-      }
-      if (!ok) {  // lost: re-create and go on
+      if (!exec.spin_until([&] { return got; }, 2s)) {  // lost: re-create and go on
         msg = std::make_unique<Image>();
         msg->data.resize(size);
         continue;
       }
-      if (record) half_rtt.push_back(ns_since(t0) / 2);
+      if (rec) half_rtt.push_back(ns_since(t0) / 2);
       std::lock_guard l(mu);
       msg = std::move(back);
     }
   };
-  run(1.0, false);
-  run(seconds, true);
+  const auto run_chained = [&](double secs, bool rec) {
+    record.store(rec);
+    const auto end = Clock::now() + std::chrono::milliseconds(int64_t(secs * 1000));
+    long seen = rounds.load();
+    auto progress = Clock::now() - 1h;
+    while (Clock::now() < end) {
+      const long r = rounds.load();
+      if (r != seen) {
+        progress = Clock::now();
+      } else if (Clock::now() - progress > 1s) {  // nothing came back (start, or a lost sample): (re)start the chain
+        chain.store(false);
+        exec.spin_for(50ms);  // a late pong lands in `back`, not in the chain
+        auto m = std::make_unique<Image>();
+        m->data.resize(size);
+        t0 = Clock::now();
+        chain.store(true, std::memory_order_release);
+        pub->publish(std::move(m));
+        progress = Clock::now();
+      }
+      seen = r;
+      std::this_thread::sleep_for(100ms);
+    }
+    chain.store(false);
+    record.store(false);
+    exec.spin_for(50ms);  // let the last round trip finish before the vector is read
+  };
+  if (immediate) {
+    run_chained(1.0, false);
+    half_rtt.clear();
+    run_chained(seconds, true);
+  } else {
+    run(1.0, false);
+    run(seconds, true);
+  }
   kill(pong, SIGTERM);
   waitpid(pong, nullptr, 0);
   const auto s = stats(half_rtt);
@@ -398,11 +440,14 @@ void dds_rtt(const std::string& self, std::size_t size, double seconds, bool imm
   std::fflush(stdout);
 }
 
-void dds_throughput(const std::string& self, std::size_t size, double seconds) {
+// batching: the publisher packs samples into few datagrams (QoS::batching), as ddsperf's pub does (it turns
+// on Cyclone's write batching); without it every sample is its own datagram (cairn's default).
+void dds_throughput(const std::string& self, std::size_t size, double seconds, bool batching) {
   cairn::Executor exec;
   cairn::Node node(opts("bench_flood", exec));
   cairn::QoS q;
   q.keep_all();
+  q.batching = batching;
   auto pub = node.create_publisher<Image>("bench/flood", q);
   const std::string log = "/tmp/cairn_bench_sink_" + std::to_string(getpid()) + ".txt";
   const pid_t sink = cairn::spawn_process({"/bin/sh", "-c", "exec " + self + " sink " + std::to_string(seconds + 2) +
@@ -412,6 +457,7 @@ void dds_throughput(const std::string& self, std::size_t size, double seconds) {
   Image m;
   m.data.resize(size);
   while (Clock::now() < end) pub->publish(m);  // const& with no local subscriber: serialized, not copied
+  pub->flush();
   int st;
   waitpid(sink, &st, 0);
   long count = 0;
@@ -422,9 +468,9 @@ void dds_throughput(const std::string& self, std::size_t size, double seconds) {
   const double rate = dt > 0 ? count / dt / 1000 : 0;
   const auto base = ddsperf_throughput(node.context().domain_id(), size, seconds);
   std::printf(
-      "{\"case\":\"dds_throughput\",\"size\":\"%s\",\"kS_per_s\":%.1f,\"received\":%ld,\"baseline\":\"ddsperf pub/sub\","
+      "{\"case\":\"dds_throughput%s\",\"size\":\"%s\",\"kS_per_s\":%.1f,\"received\":%ld,\"baseline\":\"ddsperf pub/sub\","
       "\"baseline_kS_per_s\":%.1f,\"ratio\":%.3f,\"goal\":\"ratio>=0.8\"}\n",
-      size_name(size).c_str(), rate, count, base.rate_ks, base.ok && base.rate_ks > 0 ? rate / base.rate_ks : 0.0);
+      batching ? "" : "_unbatched", size_name(size).c_str(), rate, count, base.rate_ks, base.ok && base.rate_ks > 0 ? rate / base.rate_ks : 0.0);
   std::fflush(stdout);
 }
 
@@ -470,6 +516,9 @@ int main(int argc, char** argv) {
       }
     }
   }
-  if (want("dds_throughput")) dds_throughput(self, 1024, secs);
+  if (want("dds_throughput")) {
+    dds_throughput(self, 1024, secs, true);
+    dds_throughput(self, 1024, secs, false);
+  }
   return 0;
 }

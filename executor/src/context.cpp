@@ -7,6 +7,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "cairn/dds.hpp"
 #include "cairn/intra_process.hpp"
 #include "cairn/msgs/type_support.hpp"
 #include "dds/dds.h"
@@ -74,7 +75,7 @@ int32_t Context::topic(const std::string& name, const msgs::TypeSupport& ts) {
     }
     return it->second.first;
   }
-  dds_entity_t t = dds_create_topic(pp, ts.descriptor, name.c_str(), nullptr, nullptr);
+  dds_entity_t t = create_dds_topic(pp, name, ts);
   if (t < 0) {
     throw std::runtime_error("cannot create DDS topic '" + name + "' (" + ts.dds_type_name +
                              "): " + dds_strretcode(t));

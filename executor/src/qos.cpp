@@ -89,6 +89,7 @@ std::string QoS::to_string() const {
   }
   if (deadline.count() > 0) o << ", deadline " << deadline.count() * 1e-9 << " s";
   if (lifespan.count() > 0) o << ", lifespan " << lifespan.count() * 1e-9 << " s";
+  if (batching) o << ", batching";
   return o.str();
 }
 

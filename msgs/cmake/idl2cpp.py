@@ -4,7 +4,10 @@
 The IDL under msgs/idl is the single source of truth. idlc turns each file into C types and a
 dds_topic_descriptor_t; this script turns the same file into
   <out>/include/<pkg>/<kind>/<Name>.hpp   idiomatic C++ struct (std::string, std::vector, std::array)
-  <out>/src/<pkg>/<kind>/<Name>.cpp       conversion C++ <-> idlc C struct, printing, registration
+  <out>/src/<pkg>/<kind>/<Name>.cpp       XCDR1 codec straight from/into the C++ struct (what cairn puts
+                                          on the wire), conversion C++ <-> idlc C struct (kept for tests
+                                          that compare the bytes with idlc's serializer), printing,
+                                          registration
 Only the IDL subset cairn uses is accepted (modules, const, @final struct, @default, primitive types,
 string, sequence<T[,N]>, fixed arrays, nested structs); anything else is an error naming file:line.
 """
@@ -139,6 +142,8 @@ class Parser:
                 fields = []
                 while self.peek()[1] != '}':
                     fields.append(self.field())
+                if not fields:
+                    self.err(f"empty struct '{name}' (CDR needs at least one member; ROS 2 adds a uint8)")
                 self.expect('}')
                 self.expect(';')
                 self.structs.append((scope, name, fields))
@@ -265,6 +270,18 @@ def generate(idl_path, idl_root, out_dir):
         for f in fields:
             C.append(f'  conv_from_c(c.{f["name"]}, m.{f["name"]});')
         C.append('}')
+        # XCDR1 codec straight between the C++ struct and the serialized bytes (cairn/msgs/cdr.hpp)
+        C.append(f'template <class O> static void cdr_ser_{ctype}(O& o, const {full}& m) {{')
+        for f in fields:
+            C.append(f'  cdr_field(o, m.{f["name"]}, {f["seq"] or 0});')
+        C.append('}')
+        C.append(f'void cdr_field(CdrSizer& o, const {full}& m, unsigned) {{ cdr_ser_{ctype}(o, m); }}')
+        C.append(f'void cdr_field(CdrWriter& o, const {full}& m, unsigned) {{ cdr_ser_{ctype}(o, m); }}')
+        C.append(f'void cdr_get(CdrReader& r, {full}& m, unsigned) {{')
+        for f in fields:
+            getter = 'cdr_get_bools' if f['seq'] is not None and f['type'] == 'boolean' else 'cdr_get'
+            C.append(f'  {getter}(r, m.{f["name"]}, {f["seq"] or 0});')
+        C.append('}')
         C.append(f'void print(const {full}& m, std::ostream& o, int indent, Adl) {{')
         if not fields:
             C.append('  (void)m; (void)o; (void)indent;')
@@ -290,6 +307,9 @@ def generate(idl_path, idl_root, out_dir):
         decl.append(f'void to_c(const {full}& m, {ctype}& c, Scratch& s, Adl);')
         decl.append(f'void from_c(const {ctype}& c, {full}& m, Adl);')
         decl.append(f'void print(const {full}& m, std::ostream& o, int indent, Adl);')
+        decl.append(f'void cdr_field(CdrSizer& o, const {full}& m, unsigned);')
+        decl.append(f'void cdr_field(CdrWriter& o, const {full}& m, unsigned);')
+        decl.append(f'void cdr_get(CdrReader& r, {full}& m, unsigned);')
     decl.append('}  // namespace cairn::msgs::gen')
     C[4:4] = decl
     H.append(f'#endif  // {guard}')

@@ -54,6 +54,25 @@ std::string to_text(const TypeSupport& ts, const void* msg) {
   return o.str();
 }
 
+std::vector<unsigned char> serialize(const TypeSupport& ts, const void* msg) {
+  const std::size_t n = ts.cdr_size(msg);
+  const std::size_t pad = (4 - n % 4) % 4;
+  std::vector<unsigned char> out(4 + n + pad, 0);
+  out[1] = 0x01;  // CDR_LE
+  out[3] = static_cast<unsigned char>(pad);
+  ts.cdr_write(msg, out.data() + 4);
+  return out;
+}
+
+void deserialize(const TypeSupport& ts, const unsigned char* data, std::size_t size, void* msg) {
+  if (size < 4) throw CdrError("serialized sample shorter than its encapsulation header");
+  if (data[0] != 0 || data[1] > 1) {
+    throw CdrError("unsupported CDR encapsulation " + std::to_string(data[0]) + "," + std::to_string(data[1]) +
+                   " (cairn types are XCDR1: CDR_BE or CDR_LE)");
+  }
+  ts.cdr_read(data + 4, size - 4, data[1] == 0, msg);
+}
+
 namespace gen {
 void print_indent(std::ostream& o, int indent) {
   for (int i = 0; i < indent; ++i) o.put(' ');

@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include "cairn/message_info.hpp"
 #include "cairn/qos.hpp"
@@ -16,6 +17,9 @@
 namespace cairn {
 
 class Context;
+}  // namespace cairn
+struct ddsi_serdata;
+namespace cairn {
 namespace msgs {
 struct TypeSupport;
 }
@@ -33,8 +37,11 @@ class DdsWriter {
   ~DdsWriter();
   DdsWriter(const DdsWriter&) = delete;
   DdsWriter& operator=(const DdsWriter&) = delete;
-  /// Serializes `cpp` (a C++ message of the writer's type) and writes it. Throws on DDS errors.
+  /// Serializes `cpp` (a C++ message of the writer's type, XCDR1 straight from the C++ struct) and writes
+  /// it. Throws on DDS errors and on messages that cannot be serialized (bounded sequence too long).
   void write(const void* cpp, int64_t source_timestamp_ns);
+  /// Sends what a batching writer (QoS::batching) has queued.
+  void flush();
   /// Number of matched readers (in other processes when ignore_local). Kept up to date by a
   /// publication-matched listener, so asking costs an atomic load (it is asked on every publish).
   int matched() const { return matched_.load(std::memory_order_relaxed); }
@@ -62,23 +69,48 @@ class DdsReader {
   ~DdsReader();
   DdsReader(const DdsReader&) = delete;
   DdsReader& operator=(const DdsReader&) = delete;
-  /// Takes the next valid sample into `cpp_out` (a C++ message of the reader's type); false if none.
-  /// Samples are taken from Cyclone in batches (one dds_take per kBatch samples), loaned, and converted
-  /// one at a time. Not thread-safe (one consumer at a time, as the subscription guarantees).
+  /// Takes the next valid sample and decodes it straight into `cpp_out` (a C++ message of the reader's
+  /// type; its buffers are reused when it is reused); false if none. Malformed samples are dropped and
+  /// logged. One consumer at a time (as the subscription guarantees); safe against a concurrent prefetch().
   bool take(void* cpp_out, MessageInfo& info);
+  /// Moves the serialized samples that have arrived out of Cyclone's reader into this reader's own queue
+  /// (references, no copy), where take() finds them. Called from the data-available listener, so that the
+  /// thread woken up to take() never waits for Cyclone's reader while the listener is still running.
+  void prefetch();
   int matched() const;
   int32_t entity() const { return reader_; }
+  /// Samples dropped because they did not decode (malformed CDR).
+  uint64_t rejected() const { return rejected_.load(std::memory_order_relaxed); }
 
  private:
-  struct Batch;  // loaned samples of the last dds_take (src/dds.cpp)
-  std::unique_ptr<Batch> batch_;
-  void return_batch();
-  Gid publisher_gid(uint64_t publication_handle);
+  struct Publication {
+    Gid gid{};
+    uint64_t received = 0;
+  };
+  struct Queued {
+    ::ddsi_serdata* data = nullptr;
+    bool valid = false;  // false: a dispose/unregister notification
+    int64_t source_timestamp = 0;
+    uint64_t publication_handle = 0;
+  };
+  void fill_locked();
+  Queued pop_locked();
+  void clear_queue();
+  Publication& publication(uint64_t publication_handle);
   const msgs::TypeSupport& ts_;
   DataCallback on_data_;
   int32_t reader_ = 0;
-  std::map<uint64_t, std::pair<Gid, uint64_t>> pubs_;  // publication handle -> (guid, reception count)
+  std::mutex q_mu_;
+  std::vector<Queued> ring_;  // serialized samples taken from Cyclone, oldest at q_head_
+  std::size_t q_head_ = 0, q_size_ = 0, max_queued_ = SIZE_MAX;
+  std::map<uint64_t, Publication> pubs_;  // by publication handle (consumer side only)
+  std::pair<const uint64_t, Publication>* last_pub_ = nullptr;
+  std::atomic<uint64_t> rejected_{0};
 };
+
+/// Creates a topic whose samples are C++ messages of `ts`, serialized by cairn's own ddsi_sertype (XCDR1
+/// straight from/into the C++ struct; same bytes as idlc's serializer). Returns the entity or a DDS error.
+int32_t create_dds_topic(int32_t participant, const std::string& name, const msgs::TypeSupport& ts);
 
 /// "rt/<name>" for a resolved topic name "/<name>" (ROS 2 convention).
 std::string dds_topic_name(const std::string& resolved);

@@ -78,6 +78,11 @@ class Publisher : public PublisherBase {
     }
   }
 
+  /// Sends what a batching publisher (QoS::batching) has queued for other processes; a no-op otherwise.
+  void flush() {
+    if (dds_ && qos_.batching) dds_->flush();
+  }
+
   std::size_t intra_process_subscription_count() const { return channel_ ? channel_->count() : 0; }
   std::size_t inter_process_subscription_count() const { return dds_ ? static_cast<std::size_t>(dds_->matched()) : 0; }
   std::size_t subscription_count() const { return intra_process_subscription_count() + inter_process_subscription_count(); }

@@ -25,6 +25,11 @@ struct QoS {
   std::chrono::nanoseconds lifespan{0};          ///< 0 = infinite
   Liveliness liveliness = Liveliness::Automatic;
   std::chrono::nanoseconds liveliness_lease{0};  ///< 0 = infinite
+  /// Cyclone's write batching (Internal/WriteBatch, which Cyclone 0.10 only has per process; cairn turns it on
+  /// for this one writer while creating it), publishers only: samples for other processes are packed into as
+  /// few datagrams as possible and sent when a datagram is full or on Publisher::flush(). For high-rate
+  /// streams (ddsperf's pub runs this way); the publisher must flush() at the end of each burst.
+  bool batching = false;
 
   /// ROS 2 default: reliable, volatile, keep last 10.
   static QoS defaults() { return QoS{}; }

@@ -76,13 +76,14 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
     if (dds && ctx) {
       std::weak_ptr<Subscription<T>> weak = self;
       reader_ = std::make_unique<DdsReader>(*ctx, dds_topic_name(topic_), msgs::type_support<T>(), qos_, opts,
-                                            [weak](DdsReader&) {
+                                            [weak](DdsReader& r) {
                                               auto s = weak.lock();
                                               if (!s) return;
                                               if (s->immediate()) {  // on Cyclone's receive thread
                                                 s->guarded([&] { s->drain_dds(); });
                                                 return;
                                               }
+                                              r.prefetch();  // the woken thread finds them in our queue
                                               // one wake-up drains everything that has arrived, so a burst
                                               // costs one queue entry, not one per sample
                                               if (!s->dds_pending_.exchange(true)) s->exec_->schedule(s);
@@ -115,6 +116,11 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
 
   std::size_t publisher_count_inter_process() const { return reader_ ? reader_->matched() : 0; }
   uint64_t dropped() const { return dropped_; }
+  /// Samples from other processes dropped because they did not decode (malformed CDR).
+  uint64_t dds_rejected() const {
+    const DdsReader* r = reader_raw_.load(std::memory_order_acquire);
+    return r ? r->rejected() : 0;
+  }
 
  protected:
   void execute() override {
@@ -137,14 +143,35 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
     drain_dds();
   }
 
+  /// Takes and dispatches everything that has arrived (one wake-up serves a whole burst). Samples are
+  /// decoded straight into the message the callback gets; that message is reused for the next sample when
+  /// the callback cannot keep it (const T&) or did not keep it (shared_ptr no longer shared), so a steady
+  /// stream costs no allocation per sample. Owning callbacks get a fresh object each time.
   void drain_dds() {
     DdsReader* reader = reader_raw_.load(std::memory_order_acquire);
     if (!reader) return;
-    for (;;) {
-      auto msg = std::make_unique<T>();
-      MessageInfo info;
-      if (!reader->take(msg.get(), info)) break;
-      invoke(Item{std::move(msg), info});
+    MessageInfo info;
+    if (auto* ref = std::get_if<RefCb>(&cb_)) {
+      if (!reuse_) reuse_ = std::make_shared<T>();
+      while (reader->take(reuse_.get(), info)) {
+        info.received_timestamp_ns = clock_->now().ns;
+        call_guarded([&] { (*ref)(*reuse_, info); });
+      }
+    } else if (auto* shared = std::get_if<SharedCb>(&cb_)) {
+      for (;;) {
+        if (!reuse_ || reuse_.use_count() != 1) reuse_ = std::make_shared<T>();
+        if (!reader->take(reuse_.get(), info)) break;
+        info.received_timestamp_ns = clock_->now().ns;
+        call_guarded([&] { (*shared)(reuse_, info); });
+      }
+    } else {
+      auto& owned = std::get<OwnedCb>(cb_);
+      for (;;) {
+        if (!spare_) spare_ = std::make_unique<T>();
+        if (!reader->take(spare_.get(), info)) break;
+        info.received_timestamp_ns = clock_->now().ns;
+        call_guarded([&] { owned(std::move(spare_), info); });
+      }
     }
   }
 
@@ -183,6 +210,15 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
       queue_.push_back(std::move(item));
     }
     exec_->schedule(shared_from_this());
+  }
+
+  template <class F>
+  void call_guarded(F&& f) {
+    try {
+      f();
+    } catch (const std::exception& e) {
+      CAIRN_ERROR(logger_, "callback on " << topic_ << " threw: " << e.what());
+    }
   }
 
   void invoke(Item&& item) {
@@ -225,6 +261,8 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
   uint64_t dropped_ = 0;
   std::atomic<bool> dds_pending_{false};
   std::atomic<DdsReader*> reader_raw_{nullptr};  // what callbacks on other threads read
+  std::shared_ptr<T> reuse_;  // DDS leg: the message decoded into, reused while nobody else holds it
+  std::unique_ptr<T> spare_;  // DDS leg, owning callbacks: decoded into, then handed over
 };
 
 }  // namespace cairn

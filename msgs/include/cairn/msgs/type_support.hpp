@@ -39,6 +39,17 @@ struct TypeSupport {
   void (*from_c)(const void* c, void* cpp);
   void* (*create)();
   void (*destroy)(void*);
+  /// In-place lifetime of a C++ message in caller-provided storage of cpp_size bytes (DDS sample arrays).
+  std::size_t cpp_size;
+  void (*construct)(void* at);
+  void (*destruct)(void* at);
+  /// XCDR1 codec (cairn/msgs/cdr.hpp) straight between the C++ message and the serialized payload, i.e. the
+  /// bytes after the 4-byte encapsulation header. cdr_size throws std::length_error when a bounded sequence
+  /// is too long; cdr_write writes exactly cdr_size() bytes; cdr_read validates every length against the
+  /// buffer and throws CdrError on malformed input (`big_endian`: CDR_BE encapsulation).
+  std::size_t (*cdr_size)(const void* cpp);
+  void (*cdr_write)(const void* cpp, unsigned char* payload);
+  void (*cdr_read)(const unsigned char* payload, std::size_t size, bool big_endian, void* cpp);
   /// Readable YAML-like text, as `cairn topic echo` prints it.
   void (*print)(const void* cpp, std::ostream& out);
 };
@@ -59,6 +70,12 @@ struct Adl {};
 }  // namespace gen
 
 std::string to_text(const TypeSupport& ts, const void* msg);
+
+/// The serialized sample as it goes on the wire: encapsulation header (CDR_LE) + XCDR1 payload, padded to a
+/// multiple of 4 with the padding count in the header's options (as Cyclone's own serializer does).
+std::vector<unsigned char> serialize(const TypeSupport& ts, const void* msg);
+/// Parses a serialized sample (CDR_LE or CDR_BE encapsulation) into `msg`; throws CdrError when malformed.
+void deserialize(const TypeSupport& ts, const unsigned char* data, std::size_t size, void* msg);
 
 template <class T>
 std::string to_text(const T& msg) {

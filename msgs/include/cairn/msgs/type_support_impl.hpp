@@ -7,12 +7,14 @@
 #include <cstring>
 #include <iomanip>
 #include <limits>
+#include <new>
 #include <ostream>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <vector>
 
+#include "cairn/msgs/cdr.hpp"
 #include "cairn/msgs/type_support.hpp"
 #include "dds/dds.h"
 
@@ -198,6 +200,22 @@ TypeSupport make_type_support(const char* dds_name, const char* ros_name, const 
   ts.create = []() -> void* { return new T(); };
   ts.destroy = [](void* p) { delete static_cast<T*>(p); };
   ts.print = [](const void* cpp, std::ostream& o) { print(*static_cast<const T*>(cpp), o, 0, gen::Adl{}); };
+  ts.cpp_size = sizeof(T);
+  ts.construct = [](void* at) { new (at) T(); };
+  ts.destruct = [](void* at) { static_cast<T*>(at)->~T(); };
+  ts.cdr_size = [](const void* cpp) -> std::size_t {
+    gen::CdrSizer s;
+    cdr_field(s, *static_cast<const T*>(cpp), 0u);
+    return s.pos;
+  };
+  ts.cdr_write = [](const void* cpp, unsigned char* out) {
+    gen::CdrWriter w{out};
+    cdr_field(w, *static_cast<const T*>(cpp), 0u);
+  };
+  ts.cdr_read = [](const unsigned char* in, std::size_t n, bool big_endian, void* cpp) {
+    gen::CdrReader r{in, n, 0, big_endian};
+    cdr_get(r, *static_cast<T*>(cpp), 0u);
+  };
   return ts;
 }
 
