@@ -230,9 +230,11 @@ BenchResult runBench(const BenchParams& params) {
     counted_sum += static_cast<double>(gt.size());
 
     const auto c0 = Clock::now();
-    const auto dets = detector.detect(sim.scan);
+    const auto legs = detector.detectLegs(sim.scan);
+    const auto dets = pairLegs(legs, params.detector);
     const auto c1 = Clock::now();
-    tracker.update(t, dets, pose);
+    if (params.track_aware_pairing) tracker.updateLegs(t, legs, pose, params.detector);
+    else tracker.update(t, dets, pose);
     const auto c2 = Clock::now();
     std::vector<PersonDetection> dets_frame = dets;
     for (auto& d : dets_frame) d.position = pose.transform(d.position);

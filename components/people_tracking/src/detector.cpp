@@ -12,6 +12,12 @@ PersonDetector::PersonDetector(std::shared_ptr<const LegClassifier> classifier, 
 }
 
 std::vector<PersonDetection> PersonDetector::detect(const LaserScan& scan, std::vector<LegDetection>* legs_out) const {
+  std::vector<LegDetection> legs = detectLegs(scan);
+  if (legs_out) *legs_out = legs;
+  return pairLegs(legs, params_);
+}
+
+std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan) const {
   std::vector<LegDetection> legs;
   for (const Cluster& c : segmentScan(scan, params_.segmentation)) {
     const Eigen::Vector2d centroid = c.centroid();
@@ -25,8 +31,31 @@ std::vector<PersonDetection> PersonDetector::detect(const LaserScan& scan, std::
                                                  : centroid;
     legs.push_back({center, conf, width});
   }
-  if (legs_out) *legs_out = legs;
-  return pairLegs(legs, params_);
+  return legs;
+}
+
+PersonDetection personFromLegs(const LegDetection& a, const LegDetection& b, const DetectorParams& params) {
+  const double d = (a.position - b.position).norm();
+  PersonDetection p;
+  p.position = 0.5 * (a.position + b.position);
+  // The body centre lies between the legs; the along-pair direction is less certain by the half separation
+  // (uniform over the spacing: variance (d/2)^2 / 3).
+  const Eigen::Vector2d u = (b.position - a.position) / std::max(d, 1e-9);
+  const double s2 = params.sigma_pair * params.sigma_pair;
+  p.covariance = s2 * Eigen::Matrix2d::Identity() + (d * d / 12.0) * u * u.transpose();
+  p.confidence = 0.5 * (a.confidence + b.confidence);
+  p.leg_separation = d;
+  p.legs = 2;
+  return p;
+}
+
+PersonDetection personFromLeg(const LegDetection& leg, const DetectorParams& params) {
+  PersonDetection p;
+  p.position = leg.position;
+  p.covariance = params.sigma_single * params.sigma_single * Eigen::Matrix2d::Identity();
+  p.confidence = leg.confidence;
+  p.legs = 1;
+  return p;
 }
 
 std::vector<PersonDetection> pairLegs(const std::vector<LegDetection>& legs, const DetectorParams& params) {
@@ -39,30 +68,14 @@ std::vector<PersonDetection> pairLegs(const std::vector<LegDetection>& legs, con
   std::sort(pairs.begin(), pairs.end());
   std::vector<bool> used(legs.size(), false);
   std::vector<PersonDetection> out;
-  for (const auto& [d, i, j] : pairs) {
+  for (const auto& pair : pairs) {
+    const std::size_t i = std::get<1>(pair), j = std::get<2>(pair);
     if (used[i] || used[j]) continue;
     used[i] = used[j] = true;
-    PersonDetection p;
-    p.position = 0.5 * (legs[i].position + legs[j].position);
-    // The body centre lies between the legs; the along-pair direction is less certain by the half separation
-    // (uniform over the spacing: variance (d/2)^2 / 3).
-    const Eigen::Vector2d u = (legs[j].position - legs[i].position) / std::max(d, 1e-9);
-    const double s2 = params.sigma_pair * params.sigma_pair;
-    p.covariance = s2 * Eigen::Matrix2d::Identity() + (d * d / 12.0) * u * u.transpose();
-    p.confidence = 0.5 * (legs[i].confidence + legs[j].confidence);
-    p.leg_separation = d;
-    p.legs = 2;
-    out.push_back(p);
+    out.push_back(personFromLegs(legs[i], legs[j], params));
   }
-  for (std::size_t i = 0; i < legs.size(); ++i) {
-    if (used[i] || legs[i].confidence < params.single_leg_min_confidence) continue;
-    PersonDetection p;
-    p.position = legs[i].position;
-    p.covariance = params.sigma_single * params.sigma_single * Eigen::Matrix2d::Identity();
-    p.confidence = legs[i].confidence;
-    p.legs = 1;
-    out.push_back(p);
-  }
+  for (std::size_t i = 0; i < legs.size(); ++i)
+    if (!used[i] && legs[i].confidence >= params.single_leg_min_confidence) out.push_back(personFromLeg(legs[i], params));
   return out;
 }
 

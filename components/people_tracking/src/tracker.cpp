@@ -66,7 +66,7 @@ Innovation innovation(const Track& t, const PersonDetection& d) {
 }
 }  // namespace
 
-TrackerStatus PeopleTracker::updateInFrame(double stamp, const std::vector<PersonDetection>& detections) {
+TrackerStatus PeopleTracker::checkTime(double stamp) {
   TrackerStatus status;
   if (!std::isfinite(stamp)) throw InputError("tracker update with a non-finite stamp");
   if (has_stamp_ && stamp < last_stamp_) {
@@ -77,18 +77,16 @@ TrackerStatus PeopleTracker::updateInFrame(double stamp, const std::vector<Perso
     status.reason = "time jump of " + std::to_string(stamp - last_stamp_) + " s";
   }
   if (status.reset) reset();
-  std::vector<PersonDetection> dets;
-  for (const auto& d : detections)
-    if (d.confidence >= params_.min_detection_confidence && d.position.allFinite() && d.covariance.allFinite())
-      dets.push_back(d);
-
   predict(stamp);
   last_stamp_ = stamp;
   has_stamp_ = true;
   updated_.assign(tracks_.size(), false);
-  std::vector<bool> used(dets.size(), false);
+  return status;
+}
+
+void PeopleTracker::associate(const std::vector<PersonDetection>& dets, std::vector<bool>& used) {
   if (params_.association == Association::kGnn) {
-    associateGnn(dets, used, true);   // confirmed tracks first: tentative ones cannot steal their detections
+    associateGnn(dets, used, true);  // confirmed tracks first: tentative ones cannot steal their detections
     associateGnn(dets, used, false);
   } else {
     associateJpda(dets, used);
@@ -100,7 +98,125 @@ TrackerStatus PeopleTracker::updateInFrame(double stamp, const std::vector<Perso
   }
   initiate(dets, used);
   prune();
+}
+
+TrackerStatus PeopleTracker::updateInFrame(double stamp, const std::vector<PersonDetection>& detections) {
+  const TrackerStatus status = checkTime(stamp);
+  std::vector<PersonDetection> dets;
+  for (const auto& d : detections)
+    if (d.confidence >= params_.min_detection_confidence && d.position.allFinite() && d.covariance.allFinite())
+      dets.push_back(d);
+  std::vector<bool> used(dets.size(), false);
+  associate(dets, used);
   return status;
+}
+
+TrackerStatus PeopleTracker::updateLegs(double stamp, const std::vector<LegDetection>& legs,
+                                        const Pose2& sensor_pose, const DetectorParams& pairing) {
+  const TrackerStatus status = checkTime(stamp);
+  std::vector<LegDetection> in_frame;
+  in_frame.reserve(legs.size());
+  for (const auto& l : legs)
+    if (l.position.allFinite()) in_frame.push_back({sensor_pose.transform(l.position), l.confidence, l.width});
+  std::vector<int> det_track;
+  std::vector<PersonDetection> dets = pairWithTracks(in_frame, pairing, det_track);
+  std::vector<bool> used(dets.size(), false);
+  for (std::size_t j = 0; j < dets.size(); ++j)
+    used[j] = dets[j].confidence < params_.min_detection_confidence;
+  if (params_.association == Association::kGnn) {
+    // The pairing already decided which track explains which legs.
+    for (std::size_t j = 0; j < dets.size(); ++j) {
+      if (det_track[j] < 0 || used[j]) continue;
+      const auto i = static_cast<std::size_t>(det_track[j]);
+      applyUpdate(tracks_[i], dets[j]);
+      updated_[i] = true;
+      used[j] = true;
+    }
+  }
+  associate(dets, used);
+  return status;
+}
+
+// Track-aware leg pairing: rows are two leg slots per track, columns the legs plus one "no leg" column per slot
+// (cost = gate), so the Hungarian solution gives every track the legs that fit it best jointly with its
+// neighbours. Confirmed tracks choose before tentative ones.
+std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<LegDetection>& legs,
+                                                           const DetectorParams& pairing,
+                                                           std::vector<int>& det_track) {
+  const std::size_t nl = legs.size();
+  std::vector<bool> leg_used(nl, false), gated_by_confirmed(nl, false);
+  std::vector<std::vector<std::size_t>> track_legs(tracks_.size());
+  const double spread2 = params_.leg_spread_sigma * params_.leg_spread_sigma;
+  constexpr double kForbidden = 1e9;
+  const double log_det0 = 2.0 * std::log(spread2 + pairing.sigma_pair * pairing.sigma_pair);
+  for (const bool confirmed_stage : {true, false}) {
+    std::vector<std::size_t> rows, cols;
+    for (std::size_t i = 0; i < tracks_.size(); ++i)
+      if (tracks_[i].confirmed == confirmed_stage) rows.push_back(i);
+    for (std::size_t j = 0; j < nl; ++j)
+      if (!leg_used[j]) cols.push_back(j);
+    if (rows.empty() || cols.empty()) continue;
+    const long nr = static_cast<long>(2 * rows.size()), nc = static_cast<long>(cols.size());
+    Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nr, nc + nr, kForbidden);
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      const Track& t = tracks_[rows[r]];
+      const Eigen::Matrix2d S = t.positionCovariance() + (spread2 + pairing.sigma_pair * pairing.sigma_pair) *
+                                                             Eigen::Matrix2d::Identity();
+      const Eigen::Matrix2d Si = S.inverse();
+      // Negative log-likelihood: the log-determinant keeps uncertain (coasting) tracks from taking legs that a
+      // well-localised neighbour explains. "No leg" costs the gate plus the log-determinant of a perfectly
+      // localised track, the same for every track (a per-row constant would not change the assignment).
+      const double log_det = std::log(S.determinant());
+      for (std::size_t c = 0; c < cols.size(); ++c) {
+        const Eigen::Vector2d nu = legs[cols[c]].position - t.position();
+        const double d2 = nu.dot(Si * nu);
+        if (d2 > params_.leg_gate_chi2) continue;
+        cost(static_cast<long>(2 * r), static_cast<long>(c)) = d2 + log_det;
+        cost(static_cast<long>(2 * r + 1), static_cast<long>(c)) = d2 + log_det;
+      }
+      for (long k = 0; k < 2; ++k)
+        cost(static_cast<long>(2 * r) + k, nc + static_cast<long>(2 * r) + k) = params_.leg_gate_chi2 + log_det0;
+    }
+    const std::vector<int> match = solveAssignment(cost, kForbidden);
+    // Legs inside a confirmed track's gate that it did not take (its third leg, or a leg too far from its
+    // partner) are not evidence of a new person: starting tracks on them splits one person into two.
+    if (confirmed_stage)
+      for (long r = 0; r < nr; r += 2)
+        for (long c = 0; c < nc; ++c)
+          if (cost(r, c) < kForbidden) gated_by_confirmed[cols[static_cast<std::size_t>(c)]] = true;
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      std::vector<std::size_t>& mine = track_legs[rows[r]];
+      for (std::size_t k = 0; k < 2; ++k) {
+        const int m = match[2 * r + k];
+        if (m >= 0 && m < nc) mine.push_back(cols[static_cast<std::size_t>(m)]);
+      }
+      // Two legs too far apart for one person: keep the one closer to the prediction.
+      if (mine.size() == 2 &&
+          (legs[mine[0]].position - legs[mine[1]].position).norm() > pairing.max_leg_pair_distance) {
+        const Eigen::Vector2d p = tracks_[rows[r]].position();
+        if ((legs[mine[0]].position - p).norm() > (legs[mine[1]].position - p).norm()) std::swap(mine[0], mine[1]);
+        mine.pop_back();
+      }
+      for (std::size_t j : mine) leg_used[j] = true;
+    }
+  }
+  std::vector<PersonDetection> out;
+  det_track.clear();
+  for (std::size_t i = 0; i < tracks_.size(); ++i) {
+    const auto& mine = track_legs[i];
+    if (mine.empty()) continue;
+    out.push_back(mine.size() == 2 ? personFromLegs(legs[mine[0]], legs[mine[1]], pairing)
+                                   : personFromLeg(legs[mine[0]], pairing));
+    det_track.push_back(static_cast<int>(i));
+  }
+  std::vector<LegDetection> rest;
+  for (std::size_t j = 0; j < nl; ++j)
+    if (!leg_used[j] && !gated_by_confirmed[j]) rest.push_back(legs[j]);
+  for (const PersonDetection& d : pairLegs(rest, pairing)) {
+    out.push_back(d);
+    det_track.push_back(-1);
+  }
+  return out;
 }
 
 void PeopleTracker::predict(double stamp) {

@@ -38,6 +38,12 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--delete-timeout") p.tracker.delete_timeout = number(value());
     else if (a == "--max-position-sigma") p.tracker.max_position_sigma = number(value());
     else if (a == "--confirm-hits") p.tracker.confirm_hits = static_cast<int>(number(value()));
+    else if (a == "--pairing") {
+      const std::string v = value();
+      if (v != "tracks" && v != "detector") throw InputError("--pairing expects tracks|detector, got '" + v + "'");
+      p.track_aware_pairing = v == "tracks";
+    }
+    else if (a == "--leg-spread") p.tracker.leg_spread_sigma = number(value());
     else if (a == "--pair-distance") p.detector.max_leg_pair_distance = number(value());
     else throw InputError("unknown bench option '" + a + "'");
   }

@@ -22,6 +22,7 @@ struct BenchParams {
   double duration = 0.0;       // s, 0 = whole file
   std::string model;           // classifier file; empty = shipped leg_adaboost_arras14.yml
   TrackerParams tracker{};
+  bool track_aware_pairing = true;  // legs paired with the tracks (updateLegs); false: detector's pairing (update)
   DetectorParams detector{};
   LaserModel laser{};          // runBench sets a 360 deg scan unless laser_fov_set
   bool laser_fov_set = false;

@@ -44,12 +44,18 @@ class PersonDetector {
 
   // Throws InputError on malformed scans. Optional outputs: leg detections.
   std::vector<PersonDetection> detect(const LaserScan& scan, std::vector<LegDetection>* legs = nullptr) const;
+  // Leg detections only (sensor frame), for PeopleTracker::updateLegs. Throws InputError on malformed scans.
+  [[nodiscard]] std::vector<LegDetection> detectLegs(const LaserScan& scan) const;
   [[nodiscard]] const DetectorParams& params() const { return params_; }
 
  private:
   std::shared_ptr<const LegClassifier> classifier_;
   DetectorParams params_;
 };
+
+// A person between two legs (covariance widened along the pair axis) and a person at one unpaired leg.
+PersonDetection personFromLegs(const LegDetection& a, const LegDetection& b, const DetectorParams& params);
+PersonDetection personFromLeg(const LegDetection& leg, const DetectorParams& params);
 
 // Greedy closest-first pairing of legs into persons (each leg used once); exposed for tests and other sources.
 std::vector<PersonDetection> pairLegs(const std::vector<LegDetection>& legs, const DetectorParams& params);

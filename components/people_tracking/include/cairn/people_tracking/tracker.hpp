@@ -37,6 +37,12 @@ struct TrackerParams {
   double detection_probability = 0.9;
   double clutter_density = 0.02;  // false detections per m^2 (within the gates)
   int jpda_max_events = 20000;    // larger gating clusters fall back to GNN
+  // Track-aware leg pairing (updateLegs): each track may take up to two legs whose Mahalanobis distance to its
+  // predicted position, with the leg's spread around the body centre added to the covariance, is within
+  // leg_gate_chi2. Confirmed tracks choose first (Hungarian with a "no leg" option per slot); legs nobody took
+  // are paired closest-first into new person hypotheses.
+  double leg_spread_sigma = 0.15;  // m, std of a leg centre around the body centre (hip offset + stride)
+  double leg_gate_chi2 = 9.21;     // 99 % gate, 2 dof
 };
 
 struct Track {
@@ -70,6 +76,11 @@ class PeopleTracker {
   TrackerStatus update(double stamp, const std::vector<PersonDetection>& detections, const Pose2& sensor_pose);
   // Detections already in the tracking frame.
   TrackerStatus updateInFrame(double stamp, const std::vector<PersonDetection>& detections);
+  // Leg detections (sensor frame) paired into persons with the help of the predicted tracks, so that the legs of
+  // people walking side by side are not paired across them; `pairing` supplies max_leg_pair_distance,
+  // sigma_pair, sigma_single and single_leg_min_confidence. Then associated as update() does.
+  TrackerStatus updateLegs(double stamp, const std::vector<LegDetection>& legs, const Pose2& sensor_pose,
+                           const DetectorParams& pairing);
 
   [[nodiscard]] const std::vector<Track>& tracks() const { return tracks_; }  // tentative and confirmed
   [[nodiscard]] std::vector<Track> confirmedTracks() const;
@@ -80,7 +91,11 @@ class PeopleTracker {
   void reset();
 
  private:
+  TrackerStatus checkTime(double stamp);
   void predict(double stamp);
+  void associate(const std::vector<PersonDetection>& dets, std::vector<bool>& used);
+  std::vector<PersonDetection> pairWithTracks(const std::vector<LegDetection>& legs, const DetectorParams& pairing,
+                                              std::vector<int>& det_track);
   void associateGnn(const std::vector<PersonDetection>& dets, std::vector<bool>& det_used, bool confirmed_stage);
   void associateJpda(const std::vector<PersonDetection>& dets, std::vector<bool>& det_used);
   void applyUpdate(Track& t, const PersonDetection& d);
