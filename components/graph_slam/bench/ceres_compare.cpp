@@ -7,6 +7,7 @@
 //   cairn-slam-bench [--data DIR] [--runs N] [--threads T] [--max-iters N] [--only NAME] [--outliers N]
 //                    [--solver lm|gn|dogleg] [--ceres-solver lm|dogleg] [--ordering auto|amd|nd]
 //                    [--factorization auto|simplicial|supernodal] [--no-chordal]
+//                    [--profile] [--trace]
 //
 // This is the only translation unit of the package that includes Ceres.
 #include <ceres/ceres.h>
@@ -325,6 +326,7 @@ int main(int argc, char** argv) {
   gs::OptimizerOptions opt;
   bool ceres_dogleg = false;
   bool chordal = true;
+  bool profile = false;
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
     auto next = [&]() -> std::string {
@@ -350,6 +352,10 @@ int main(int argc, char** argv) {
       opt.algorithm = gs::parseAlgorithm(next());
     } else if (a == "--ceres-solver") {
       ceres_dogleg = next() == "dogleg";
+    } else if (a == "--trace") {
+      opt.trace = true;
+    } else if (a == "--profile") {
+      profile = true;
     } else if (a == "--no-chordal") {
       chordal = false;
     } else if (a == "--ordering") {
@@ -364,7 +370,8 @@ int main(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: cairn-slam-bench [--data DIR] [--runs N] [--threads T] [--max-iters N] [--only NAME]\n"
                    "         [--outliers N] [--solver lm|gn|dogleg] [--ceres-solver lm|dogleg]\n"
-                   "         [--ordering auto|amd|nd] [--factorization auto|simplicial|supernodal] [--no-chordal]\n");
+                   "         [--ordering auto|amd|nd] [--factorization auto|simplicial|supernodal] [--no-chordal]\n"
+                   "         [--profile] [--trace]\n");
       return 2;
     }
   }
@@ -439,6 +446,14 @@ int main(int argc, char** argv) {
                 d.name.c_str(), graph.variables().size(), graph.factors().size(), cs.final_chi2, cr.chi2,
                 (cs.final_chi2 - cr.chi2) / cr.chi2, mc, cs.iterations, mr, cr.iterations, mc / mr, mcc, mcr,
                 mcc / mcr, chordal ? chs.final_chi2 : 0.0, chordal ? median(tch) : 0.0, notes.c_str());
+    if (profile) {
+      std::printf("  cairn phases (last run) [s]: structure %.4f linearize %.4f factorize %.4f solve %.4f evaluate %.4f"
+                  " other %.4f; %d factorizations, factor nnz %.0f, %.3g flop each\n",
+                  cs.time_structure_s, cs.time_linearize_s, cs.time_factorize_s, cs.time_solve_s, cs.time_evaluate_s,
+                  cs.time_s - cs.time_structure_s - cs.time_linearize_s - cs.time_factorize_s - cs.time_solve_s -
+                      cs.time_evaluate_s,
+                  cs.numeric_factorizations, cs.factor_nonzeros, cs.factor_flops);
+    }
     std::fflush(stdout);
   }
   return 0;

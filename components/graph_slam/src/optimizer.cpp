@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -65,6 +66,18 @@ Optimizer& Optimizer::operator=(Optimizer&&) noexcept = default;
 
 namespace {
 
+// Runs f() and adds its wall time to acc.
+template <typename F>
+auto timed(double& acc, F&& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  struct Add {
+    double& acc;
+    std::chrono::steady_clock::time_point t0;
+    ~Add() { acc += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); }
+  } add{acc, t0};
+  return f();
+}
+
 double stateNorm(const std::vector<Variable>& values) {
   double s = 0.0;
   for (const Variable& v : values) {
@@ -86,7 +99,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   OptimizerSummary sum;
   sum.variables = graph.variables().size();
   sum.factors = graph.factors().size();
-  sum.structure_rebuilt = im.ensureStructure(graph, options_);
+  sum.structure_rebuilt = timed(sum.time_structure_s, [&] { return im.ensureStructure(graph, options_); });
   if (im.gauge) sum.gauge = graph.variables()[*im.gauge].id;
 
   detail::BlockSystem& sys = im.system;
@@ -97,7 +110,15 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   Eigen::VectorXd grad(n), step(n), hdiag(n), dscale(n), tmp(n);
 
   double chi2 = 0.0;
-  double cost = sys.linearize(graph, x, grad, threads, &chi2);
+  auto linearize = [&] { return timed(sum.time_linearize_s, [&] { return sys.linearize(graph, x, grad, threads, &chi2); }); };
+  auto factorize = [&] { return timed(sum.time_factorize_s, [&] { return im.factorize(); }); };
+  auto solve = [&](const Eigen::VectorXd& b, Eigen::VectorXd& out) {
+    timed(sum.time_solve_s, [&] { sys.cholesky().solve(b.data(), out.data()); });
+  };
+  auto multiply = [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) {
+    timed(sum.time_solve_s, [&] { sys.cholesky().multiply(v.data(), out.data()); });
+  };
+  double cost = linearize();
   sum.initial_chi2 = chi2;
   sum.initial_cost = cost;
   double* hv = n > 0 ? sys.cholesky().values() : nullptr;
@@ -139,7 +160,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
     if (options_.algorithm == Algorithm::kLevenbergMarquardt) {
       set_damping(lambda);
       ++sum.iterations;
-      if (!im.factorize()) {
+      if (!factorize()) {
         // Not positive definite (e.g. an indefinite / singular system): raise the damping, no step.
         lambda *= nu;
         nu *= 2.0;
@@ -149,7 +170,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
         }
         continue;
       }
-      sys.cholesky().solve(grad.data(), step.data());
+      solve(grad, step);
       step = -step;
       // Predicted decrease of F (Madsen/Nielsen): h^T (lambda D h - g).
       pred = step.dot(lambda * dscale.cwiseProduct(step) - grad);
@@ -157,17 +178,17 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
       ++sum.iterations;
       double mu = 0.0;
       set_damping(mu);
-      bool ok = im.factorize();
+      bool ok = factorize();
       // A singular / indefinite Gauss-Newton system gets the smallest damping that makes it factorizable.
       for (mu = 1e-12; !ok && mu < 1e32; mu *= 100.0) {
         set_damping(mu);
-        ok = im.factorize();
+        ok = factorize();
       }
       if (!ok) {
         sum.termination = "system not positive definite";
         break;
       }
-      sys.cholesky().solve(grad.data(), step.data());
+      solve(grad, step);
       step = -step;
       pred = -step.dot(grad);
     } else {
@@ -178,21 +199,21 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
         dsq = dscale.cwiseSqrt();
         set_damping(0.0);
         const Eigen::VectorXd v = grad.cwiseQuotient(dscale);  // D^-2 g
-        sys.cholesky().multiply(v.data(), tmp.data());
+        multiply(v, tmp);
         const double vHv = v.dot(tmp);
         // Cauchy point in scaled coordinates: minimizer of the model along -D^-2 g.
         const double alpha = vHv > 0.0 ? grad.dot(v) / vHv : 0.0;
         h_sd = -alpha * v;
-        bool ok = im.factorize();
+        bool ok = factorize();
         for (double mu = 1e-12; !ok && mu < 1e32; mu *= 100.0) {
           set_damping(mu);
-          ok = im.factorize();
+          ok = factorize();
         }
         if (!ok) {
           sum.termination = "system not positive definite";
           break;
         }
-        sys.cholesky().solve(grad.data(), h_gn.data());
+        solve(grad, h_gn);
         h_gn = -h_gn;
         set_damping(0.0);
         need_solve = false;
@@ -213,7 +234,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
         step = h_sd + beta * d;
       }
       step_norm_scaled = step.cwiseProduct(dsq).norm();
-      sys.cholesky().multiply(step.data(), tmp.data());
+      multiply(step, tmp);
       // Predicted decrease of F = sum rho ~ F + 2 g^T h + h^T H h.
       pred = -(2.0 * grad.dot(step) + step.dot(tmp));
     }
@@ -225,9 +246,14 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
     }
     sys.retract(x, step, trial);
     double new_chi2 = 0.0;
-    const double new_cost = sys.evaluate(graph, trial, threads, &new_chi2);
+    const double new_cost =
+        timed(sum.time_evaluate_s, [&] { return sys.evaluate(graph, trial, threads, &new_chi2); });
     const double actual = cost - new_cost;
     const double ratio = pred > 0.0 ? actual / pred : -1.0;
+    if (options_.trace) {
+      std::fprintf(stderr, "iter %3d cost %.12g trial %.12g ratio %8.3g |step| %9.3g lambda %9.3g radius %9.3g\n",
+                   sum.iterations, cost, new_cost, ratio, step.norm(), lambda, radius);
+    }
     bool accept = false;
     if (options_.algorithm == Algorithm::kGaussNewton) {
       accept = std::isfinite(new_cost) && new_cost <= cost;
@@ -280,7 +306,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
       sum.termination = "function tolerance";
       break;
     }
-    cost = sys.linearize(graph, x, grad, threads, &chi2);
+    cost = linearize();
     save_diag();
     need_solve = true;
   }
@@ -293,6 +319,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   sum.symbolic_analyses = im.symbolic_total;
   sum.numeric_factorizations = im.numeric_total;
   sum.factor_nonzeros = n > 0 ? sys.cholesky().factorNonzeros() : 0.0;
+  sum.factor_flops = n > 0 ? sys.cholesky().factorFlops() : 0.0;
   sum.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sum;
 }

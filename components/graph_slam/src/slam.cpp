@@ -49,7 +49,7 @@ GraphSlam::Impl::Impl(SlamOptions o) : options(std::move(o)), optimizer(options.
   }
   if (options.use_verifier && options.loop_closure) {
     verifier = options.verifier_model.empty() ? LoopVerifier::loadDefault() : LoopVerifier::load(options.verifier_model);
-    if (!std::isnan(options.verifier_threshold)) verifier->setThreshold(options.verifier_threshold);
+    verifier->setThreshold(verifier->threshold() + options.verifier_threshold_offset);
     descriptor_options = verifier->descriptorOptions();
   }
   startTrajectory();
@@ -483,9 +483,7 @@ int GraphSlam::Impl::searchLoops(std::int64_t id) {
     const double r = searchRadius();
     stats.last_radius = r;
     const std::size_t matches_before = stats.loop_matches;
-    const double vt = std::isnan(options.verifier_local_threshold) && verifier ? verifier->threshold()
-                                                                            : options.verifier_local_threshold;
-    for (const LoopMatch& m : confirmLocal(localSearch(q, r, vt))) {
+    for (const LoopMatch& m : confirmLocal(localSearch(q, r, options.verifier_local_threshold))) {
       addLoopEdge(m.query, m);
       ++added;
     }
@@ -518,9 +516,7 @@ void GraphSlam::Impl::localizeScan(const LocalResult& r, const sim::LaserScan& s
     q.descriptor = &desc;
     std::vector<LoopMatch> found;
     if (linked) {
-      found = localSearch(q, searchRadius(), std::isnan(options.verifier_local_threshold) && verifier
-                                                 ? verifier->threshold()
-                                                 : options.verifier_local_threshold);
+      found = localSearch(q, searchRadius(), options.verifier_local_threshold);
     } else {
       std::vector<LoopMatch> fresh = globalSearch(q);
       std::vector<LoopMatch> agreeing;

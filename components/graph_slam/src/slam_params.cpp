@@ -72,7 +72,8 @@ std::vector<SlamParam> makeTable() {
   t.push_back(param("loop_max_matches", "geometric matches per search", &SlamOptions::loop_max_matches, 1, 1000));
   t.push_back(param("use_verifier", "screen candidates with the AdaBoost verifier (Stüde §3.2.1)", &SlamOptions::use_verifier));
   t.push_back(param("verifier_model", "verifier model file (empty: shipped model)", &SlamOptions::verifier_model));
-  t.push_back(param("verifier_threshold", "verifier threshold on the boosted score (NaN: the model's)", &SlamOptions::verifier_threshold));
+  t.push_back(param("verifier_threshold_offset", "added to the model's verifier threshold (global search)",
+                    &SlamOptions::verifier_threshold_offset, -100, 100));
   t.push_back(param("loop_min_score", "branch-and-bound minimum match score (0..1)", &SlamOptions::loop_min_score, 0, 1));
   t.push_back(param("loop_angular_window", "loop search half angular window (rad)", &SlamOptions::loop_angular_window, 0, 3.15));
   t.push_back(param("bnb_depth", "branch-and-bound precomputation depth", &SlamOptions::bnb_depth, 1, 12));
@@ -83,8 +84,8 @@ std::vector<SlamParam> makeTable() {
   t.push_back(param("loop_confirm_window", "nodes a pending loop match waits for confirmation", &SlamOptions::loop_confirm_window, 1, 1e6));
   t.push_back(param("loop_confirm_translation", "agreement of confirming matches (m)", &SlamOptions::loop_confirm_translation, 0, 100));
   t.push_back(param("loop_confirm_rotation", "agreement of confirming matches (rad)", &SlamOptions::loop_confirm_rotation, 0, 3.2));
-  t.push_back(param("verifier_local_threshold", "verifier score needed in the local search (NaN: the model's)",
-                    &SlamOptions::verifier_local_threshold));
+  t.push_back(param("verifier_local_threshold", "boosted verifier score needed in the local search",
+                    &SlamOptions::verifier_local_threshold, -100, 100));
   t.push_back(param("alpha_min", "global search until n_local/n_WM ≥ α_min; Stüde App. A 0.5", &SlamOptions::alpha_min, 0, 1));
   t.push_back(param("n_start", "verified global links before local search; Stüde App. A 3", &SlamOptions::n_start, 1, 1000));
   t.push_back(param("n_ver", "agreeing detections per global link; Stüde App. A 2", &SlamOptions::n_ver, 0, 1000));
@@ -134,7 +135,7 @@ void setSlamParameter(SlamOptions& options, const std::string& name, const std::
       pos = 0;
     }
     if (pos != value.size() || value.empty()) throw std::invalid_argument(name + ": expected a number, got '" + value + "'");
-    if (!std::isnan(v)) range(v);
+    range(v);
     **d = v;
   } else if (auto* i = std::get_if<int*>(&ref)) {
     std::size_t pos = 0;

@@ -43,6 +43,8 @@ class SparseCholesky {
   int numericFactorizations() const { return numeric_factorizations_; }
   /// Nonzeros of the factor (after analyze()).
   double factorNonzeros() const;
+  /// Floating-point operations of one numeric factorization (after analyze()).
+  double factorFlops() const { return common_.fl; }
   cholmod_common* common() { return &common_; }
 
  private:

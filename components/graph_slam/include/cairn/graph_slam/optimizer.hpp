@@ -50,6 +50,8 @@ struct OptimizerOptions {
   int num_threads = 2;
   /// Reuse the last LM damping / dogleg radius when optimizing the same structure again (incremental use).
   bool warm_start_damping = false;
+  /// Print one line per iteration (cost, step, damping / radius) to stderr.
+  bool trace = false;
 };
 
 struct OptimizerSummary {
@@ -64,10 +66,18 @@ struct OptimizerSummary {
   bool converged = false;
   std::string termination;
   double time_s = 0.0;
+  /// Wall time per phase (profile): pattern + ordering + symbolic analysis, linearization + assembly,
+  /// numeric factorization, triangular solves / products, cost evaluation of trial steps.
+  double time_structure_s = 0.0;
+  double time_linearize_s = 0.0;
+  double time_factorize_s = 0.0;
+  double time_solve_s = 0.0;
+  double time_evaluate_s = 0.0;
   bool structure_rebuilt = false;      ///< this call rebuilt pattern + symbolic analysis
   int symbolic_analyses = 0;           ///< cumulative over the optimizer's life
   int numeric_factorizations = 0;      ///< cumulative over the optimizer's life
   double factor_nonzeros = 0.0;        ///< nonzeros of the Cholesky factor (fill-in diagnostic)
+  double factor_flops = 0.0;           ///< floating-point operations of one numeric factorization
   std::optional<VariableId> gauge;     ///< variable held fixed automatically (nothing fixed, no priors)
 };
 

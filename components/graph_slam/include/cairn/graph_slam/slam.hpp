@@ -69,8 +69,8 @@ struct SlamOptions {
   /// Use the learned verifier (Stüde §3.2.1) to screen candidates; without it every candidate is matched.
   bool use_verifier = true;
   std::string verifier_model;  ///< empty: the shipped model
-  /// Verifier threshold on the boosted score; NaN: the model's own (chosen for a low FPR, see README).
-  double verifier_threshold = std::numeric_limits<double>::quiet_NaN();
+  /// Added to the model's threshold on the boosted score (0: the model's own, chosen for FPR ≤ 1 %, see README).
+  double verifier_threshold_offset = 0.0;
   /// Branch-and-bound: minimum mean matching value of the scan in the candidate submap (0..1).
   double loop_min_score = 0.6;
   /// Half width of the angular search window (rad) of the local search.
@@ -95,8 +95,9 @@ struct SlamOptions {
   int loop_confirm_window = 30;
   double loop_confirm_translation = 0.3;
   double loop_confirm_rotation = 0.05;
-  /// Local search: candidates whose verifier score is below this are not matched (the strict model threshold,
-  /// chosen for FPR ≤ 1 %, is kept for the global search where nothing else constrains a match). NaN: the model's.
+  /// Local search: candidates whose boosted verifier score is below this are not matched (the strict model
+  /// threshold is kept for the global search, where nothing else constrains a match; inside the eq. 3.8 radius
+  /// the geometric match and the confirmation rule do the rest).
   double verifier_local_threshold = 0.0;
 
   // ---- global search (new session on a loaded map, or lost) — Stüde §3.2.1, Appendix A

@@ -1,0 +1,225 @@
+// cairn_graph_slam::SlamNode in a container: scans, odometry and the base->laser TF of a simulated run (sim core,
+// seeded) arrive over DDS from another context; the map must come back (transient local, so a late subscriber gets
+// it), pose and map->odom TF follow each scan, the state can be saved and loaded, a broken state file gives a clear
+// error without stopping the node, and malformed scans are skipped.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+
+#include "cairn/sim/simulator.hpp"
+#include "cairn/sim/world.hpp"
+#include "cairn/test_support.hpp"
+#include "cairn_slam_msgs/msg/SlamGraph.hpp"
+#include "cairn_slam_msgs/srv/LoadState.hpp"
+#include "cairn_slam_msgs/srv/Optimize.hpp"
+#include "cairn_slam_msgs/srv/SaveState.hpp"
+#include "geometry_msgs/msg/PoseWithCovarianceStamped.hpp"
+#include "nav_msgs/msg/OccupancyGrid.hpp"
+#include "nav_msgs/msg/Odometry.hpp"
+#include "sensor_msgs/msg/LaserScan.hpp"
+#include "tf2_msgs/msg/TFMessage.hpp"
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+using cairn::testing::wait_for;
+
+namespace {
+
+builtin_interfaces::msg::Time stampOf(double s) {
+  builtin_interfaces::msg::Time t;
+  t.sec = static_cast<int32_t>(std::floor(s));
+  t.nanosec = static_cast<uint32_t>(std::llround((s - std::floor(s)) * 1e9));
+  return t;
+}
+
+sensor_msgs::msg::LaserScan toMsg(const cairn::sim::LaserScan& s) {
+  sensor_msgs::msg::LaserScan m;
+  m.header.stamp = stampOf(s.stamp);
+  m.header.frame_id = "laser";
+  m.angle_min = s.angle_min;
+  m.angle_max = s.angle_max;
+  m.angle_increment = s.angle_increment;
+  m.range_min = s.range_min;
+  m.range_max = s.range_max;
+  m.ranges = s.ranges;
+  return m;
+}
+
+nav_msgs::msg::Odometry toMsg(const cairn::sim::Odometry& o) {
+  nav_msgs::msg::Odometry m;
+  m.header.stamp = stampOf(o.stamp);
+  m.header.frame_id = "odom";
+  m.child_frame_id = "base_link";
+  m.pose.pose.position.x = o.pose.x;
+  m.pose.pose.position.y = o.pose.y;
+  m.pose.pose.orientation.z = std::sin(0.5 * o.pose.theta);
+  m.pose.pose.orientation.w = std::cos(0.5 * o.pose.theta);
+  return m;
+}
+
+}  // namespace
+
+TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
+  namespace sim = cairn::sim;
+  const sim::World office = sim::loadWorld(sim::resolveWorldPath("office"));
+  sim::SimConfig cfg;
+  cfg.seed = 5;
+  cfg.people = false;
+  cfg.crowd = false;
+  sim::Simulator s(office, cfg);
+  s.followRoute({{2, 12.55}, {14, 12.55}});
+  sim::SimOutput out;
+  s.advance(25.0, out);
+  ASSERT_GT(out.scans.size(), 100u);
+
+  cairn::testing::InProcessContainer container("slam_container");
+  cairn::LoadRequest req{"cairn_graph_slam::SlamNode", "slam"};
+  req.parameters["use_verifier"] = false;
+  req.parameters["map_publish_period"] = 1.0;
+  req.parameters["laser_theta"] = 1.0;  // wrong on purpose: the TF below (identity) must win
+  const auto loaded = container.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  container.start();
+
+  cairn::testing::PeerNode robot("robot");
+  cairn::Node& n = robot.node();
+  auto scan_pub = n.create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS::sensor_data().reliable().keep_last(50));
+  auto odom_pub = n.create_publisher<nav_msgs::msg::Odometry>("odom", cairn::QoS{}.keep_last(50));
+  auto tf_static = n.create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", cairn::QoS::latched());
+  std::mutex mu;
+  std::atomic<int> poses{0}, tfs{0};
+  geometry_msgs::msg::PoseWithCovarianceStamped last_pose;
+  auto pose_sub = n.create_subscription<geometry_msgs::msg::PoseWithCovarianceStamped>(
+      "slam/pose", cairn::QoS{}, [&](const geometry_msgs::msg::PoseWithCovarianceStamped& m) {
+        std::lock_guard l(mu);
+        last_pose = m;
+        ++poses;
+      });
+  auto tf_sub = n.create_subscription<tf2_msgs::msg::TFMessage>("/tf", cairn::QoS{}.keep_last(100), [&](const tf2_msgs::msg::TFMessage& m) {
+    for (const auto& t : m.transforms)
+      if (t.header.frame_id == "map" && t.child_frame_id == "odom") ++tfs;
+  });
+  auto save = n.create_client<cairn_slam_msgs::srv::SaveState_Request, cairn_slam_msgs::srv::SaveState_Response>("slam/save_state");
+  auto load = n.create_client<cairn_slam_msgs::srv::LoadState_Request, cairn_slam_msgs::srv::LoadState_Response>("slam/load_state");
+  auto optimize = n.create_client<cairn_slam_msgs::srv::Optimize_Request, cairn_slam_msgs::srv::Optimize_Response>("slam/optimize");
+  robot.start();
+  ASSERT_TRUE(wait_for([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s));
+
+  // base_link -> laser: identity (sim's laser sits at the base origin); the component must use it, not laser_theta.
+  tf2_msgs::msg::TFMessage st;
+  geometry_msgs::msg::TransformStamped mount;
+  mount.header.frame_id = "base_link";
+  mount.child_frame_id = "laser";
+  mount.transform.rotation.w = 1.0;
+  st.transforms.push_back(mount);
+  tf_static->publish(st);
+
+  std::size_t oi = 0;
+  int published = 0;
+  for (std::size_t i = 0; i < out.scans.size(); ++i) {
+    const auto& scan = out.scans[i];
+    while (oi < out.odometry.size() && out.odometry[oi].stamp <= scan.stamp + 1e-9) odom_pub->publish(toMsg(out.odometry[oi++]));
+    scan_pub->publish(toMsg(scan));
+    ++published;
+    if (i == out.scans.size() / 2) {
+      // Garbage in the middle: a scan with no beams and one with a NaN increment are skipped, not fatal.
+      auto bad = toMsg(scan);
+      bad.ranges.clear();
+      scan_pub->publish(bad);
+      bad = toMsg(scan);
+      bad.angle_increment = std::numeric_limits<float>::quiet_NaN();
+      scan_pub->publish(bad);
+    }
+    std::this_thread::sleep_for(3ms);
+  }
+  ASSERT_TRUE(wait_for([&] { return poses.load() >= published - 5; }, 30s)) << poses.load() << " of " << published;
+  EXPECT_GT(tfs.load(), published / 2);
+  {
+    std::lock_guard l(mu);
+    // The robot drove ~12 m along the corridor from (2, 12.55): the pose (map = first odometry frame) moved too.
+    const auto& p = last_pose.pose.pose.position;
+    EXPECT_GT(std::hypot(p.x, p.y), 5.0);
+  }
+
+  // A late subscriber gets the latched map.
+  std::atomic<bool> got_map{false};
+  nav_msgs::msg::OccupancyGrid map;
+  auto map_sub = n.create_subscription<nav_msgs::msg::OccupancyGrid>("map", cairn::QoS::latched(), [&](const nav_msgs::msg::OccupancyGrid& m) {
+    std::lock_guard l(mu);
+    map = m;
+    got_map = true;
+  });
+  ASSERT_TRUE(wait_for([&] { return got_map.load(); }, 20s));
+  {
+    std::lock_guard l(mu);
+    EXPECT_EQ(map.header.frame_id, "map");
+    EXPECT_NEAR(map.info.resolution, 0.05, 1e-6);
+    ASSERT_EQ(map.data.size(), static_cast<std::size_t>(map.info.width) * map.info.height);
+    std::size_t occupied = 0, free_cells = 0;
+    for (int8_t v : map.data) {
+      occupied += v > 65;
+      free_cells += v >= 0 && v < 20;
+    }
+    EXPECT_GT(occupied, 300u);
+    EXPECT_GT(free_cells, 3000u);
+    // The corridor runs along x (the route): the occupied cells' principal axis is within 10° of it. Scans
+    // rotated by the wrong laser_theta (1 rad) would turn the walls by 57°.
+    double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0, k = 0;
+    for (uint32_t y = 0; y < map.info.height; ++y)
+      for (uint32_t x = 0; x < map.info.width; ++x)
+        if (map.data[y * map.info.width + x] > 65) {
+          sx += x, sy += y, sxx += double(x) * x, syy += double(y) * y, sxy += double(x) * y, ++k;
+        }
+    const double cxx = sxx / k - (sx / k) * (sx / k), cyy = syy / k - (sy / k) * (sy / k), cxy = sxy / k - (sx / k) * (sy / k);
+    const double axis = 0.5 * std::atan2(2 * cxy, cxx - cyy);
+    EXPECT_LT(std::abs(axis), 10.0 * M_PI / 180.0) << axis;
+  }
+
+  cairn_slam_msgs::srv::Optimize_Request oq;
+  oq.republish_map = true;
+  auto orr = optimize->call(oq, 20s);
+  ASSERT_TRUE(orr);
+  EXPECT_TRUE(orr->success);
+
+  const fs::path dir = fs::temp_directory_path() / ("cairn_slam_component_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  cairn_slam_msgs::srv::SaveState_Request sq;
+  sq.path = (dir / "state.cslam").string();
+  sq.map_stem = (dir / "map").string();
+  auto sr = save->call(sq, 20s);
+  ASSERT_TRUE(sr);
+  EXPECT_TRUE(sr->success) << sr->message;
+  EXPECT_GT(sr->nodes, 20u);
+  EXPECT_TRUE(fs::exists(dir / "state.cslam"));
+  EXPECT_TRUE(fs::exists(dir / "map.pgm"));
+
+  // A truncated state file: a clear error, the node keeps its map and keeps running.
+  {
+    std::ifstream in(dir / "state.cslam", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    std::ofstream(dir / "broken.cslam", std::ios::binary) << bytes.substr(0, bytes.size() / 3);
+  }
+  cairn_slam_msgs::srv::LoadState_Request lq;
+  lq.path = (dir / "broken.cslam").string();
+  auto lr = load->call(lq, 20s);
+  ASSERT_TRUE(lr);
+  EXPECT_FALSE(lr->success);
+  EXPECT_NE(lr->message.find("broken.cslam"), std::string::npos) << lr->message;
+  lq.path = (dir / "state.cslam").string();
+  lq.localization_only = true;
+  lr = load->call(lq, 20s);
+  ASSERT_TRUE(lr);
+  EXPECT_TRUE(lr->success) << lr->message;
+  EXPECT_EQ(lr->nodes, sr->nodes);
+  // Still alive: a pose for a new scan.
+  const int before = poses.load();
+  auto again = toMsg(out.scans.back());
+  again.header.stamp = stampOf(out.scans.back().stamp + 1.0);
+  scan_pub->publish(again);
+  EXPECT_TRUE(wait_for([&] { return poses.load() > before; }, 10s));
+  fs::remove_all(dir);
+}
