@@ -469,8 +469,9 @@ void dds_throughput(const std::string& self, std::size_t size, double seconds, b
   const auto base = ddsperf_throughput(node.context().domain_id(), size, seconds);
   std::printf(
       "{\"case\":\"dds_throughput%s\",\"size\":\"%s\",\"kS_per_s\":%.1f,\"received\":%ld,\"baseline\":\"ddsperf pub/sub\","
-      "\"baseline_kS_per_s\":%.1f,\"ratio\":%.3f,\"goal\":\"ratio>=0.8\"}\n",
-      batching ? "" : "_unbatched", size_name(size).c_str(), rate, count, base.rate_ks, base.ok && base.rate_ks > 0 ? rate / base.rate_ks : 0.0);
+      "\"baseline_kS_per_s\":%.1f,\"ratio\":%.3f,\"goal\":\"%s\"}\n",
+      batching ? "" : "_unbatched", size_name(size).c_str(), rate, count, base.rate_ks, base.ok && base.rate_ks > 0 ? rate / base.rate_ks : 0.0,
+      batching ? "ratio>=0.8" : "none: information (ddsperf pub batches; one datagram per sample here)");
   std::fflush(stdout);
 }
 

@@ -145,8 +145,9 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
 
   /// Takes and dispatches everything that has arrived (one wake-up serves a whole burst). Samples are
   /// decoded straight into the message the callback gets; that message is reused for the next sample when
-  /// the callback cannot keep it (const T&) or did not keep it (shared_ptr no longer shared), so a steady
-  /// stream costs no allocation per sample. Owning callbacks get a fresh object each time.
+  /// the callback cannot keep it (const T&) or did not keep it (shared_ptr no longer shared; a weak_ptr
+  /// does not count as keeping it), so a steady stream costs no allocation per sample. Owning callbacks get
+  /// a fresh object each time.
   void drain_dds() {
     DdsReader* reader = reader_raw_.load(std::memory_order_acquire);
     if (!reader) return;
