@@ -23,6 +23,7 @@
 #include "cairn/people_tracking/guide.hpp"
 #include "cairn/people_tracking/masking.hpp"
 #include "cairn/people_tracking/tracker.hpp"
+#include "cairn/tf.hpp"
 #include "cairn_people_msgs/msg/GuideState.hpp"
 #include "cairn_people_msgs/msg/PersonDetections.hpp"
 #include "cairn_people_msgs/msg/TrackedPersons.hpp"
@@ -98,9 +99,11 @@ class PeopleTracker : public cairn::Node {
                                "; relative paths also searched in share/cairn_people_tracking/models", {}, {}, true});
     use_odom_ = declare_parameter<bool>("use_odom", true, D{"compensate robot motion with `odom` (tracks in its frame); false: tracks in the laser frame", {}, {}, true});
     odom_tolerance_ = declare_parameter<double>("odom_tolerance", 0.2, D{"s a scan may be newer/older than the odometry buffer (extrapolated with the twist)", 0.0, 2.0, true});
-    mount_.x = declare_parameter<double>("sensor_x", 0.0, D{"laser position in the odometry child (base) frame, m", -10.0, 10.0, true});
-    mount_.y = declare_parameter<double>("sensor_y", 0.0, D{"laser position in the base frame, m", -10.0, 10.0, true});
-    mount_.theta = declare_parameter<double>("sensor_yaw", 0.0, D{"laser yaw in the base frame, rad", -M_PI, M_PI, true});
+    base_frame_ = declare_parameter<std::string>("base_frame", "base_link", D{"robot frame of the odometry (child frame); the laser mount is looked up as TF base_frame <- scan frame_id", {}, {}, true});
+    tf_timeout_ = declare_parameter<double>("tf_timeout", 1.0, D{"s of scans to wait for the base_frame <- laser TF before using sensor_x/y/yaw", 0.0, 60.0, true});
+    mount_.x = declare_parameter<double>("sensor_x", 0.0, D{"fallback laser position in the base frame when no TF arrives within tf_timeout, m", -10.0, 10.0, true});
+    mount_.y = declare_parameter<double>("sensor_y", 0.0, D{"fallback laser position in the base frame, m", -10.0, 10.0, true});
+    mount_.theta = declare_parameter<double>("sensor_yaw", 0.0, D{"fallback laser yaw in the base frame, rad", -M_PI, M_PI, true});
 
     // Detector (segmentation.hpp, detector.hpp).
     pt::DetectorParams dp;
@@ -173,6 +176,10 @@ class PeopleTracker : public cairn::Node {
     }
     detector_ = std::make_unique<pt::PersonDetector>(classifier, dp);
     tracker_ = std::make_unique<pt::PeopleTracker>(tp);
+    if (use_odom_) {
+      tf_buffer_ = std::make_shared<cairn::TransformBuffer>(30.0);
+      tf_listener_ = std::make_unique<cairn::TransformListener>(*this, tf_buffer_);
+    }
     guide_ = std::make_unique<pt::GuideTracker>(gp);
 
     det_pub_ = create_publisher<pmsg::PersonDetections>("people/detections", cairn::QoS{});
@@ -196,6 +203,38 @@ class PeopleTracker : public cairn::Node {
     pt::Pose2 pose;
     double vx, vy, wz;  // body-frame twist
   };
+
+  // Laser mount from TF (base_frame <- scan frame, latest); while it is missing, scans are skipped for
+  // tf_timeout seconds (scan time) and then the sensor_x/y/yaw parameters are used (logged once). A TF that
+  // arrives later still replaces the parameters.
+  bool resolveMount(const std::string& laser_frame, double stamp) {
+    if (mount_from_tf_) return true;
+    if (laser_frame.empty() || laser_frame == base_frame_) {
+      if (laser_frame == base_frame_) {
+        mount_ = pt::Pose2{};
+        mount_from_tf_ = true;
+      }
+      return true;
+    }
+    try {
+      const cairn::RigidTransform tf = tf_buffer_->lookup(base_frame_, laser_frame, cairn::Time{0});
+      const Eigen::Vector3d x = tf.q * Eigen::Vector3d::UnitX();
+      mount_ = pt::Pose2{tf.t.x(), tf.t.y(), std::atan2(x.y(), x.x())};
+      mount_from_tf_ = true;
+      CAIRN_INFO(logger(), "laser mount from TF " << base_frame_ << " <- " << laser_frame << ": (" << mount_.x << ", "
+                                                  << mount_.y << ", " << mount_.theta << ")");
+      return true;
+    } catch (const cairn::TransformError& e) {
+      if (!first_scan_stamp_) first_scan_stamp_ = stamp;
+      if (stamp - *first_scan_stamp_ < tf_timeout_) return false;
+      if (!mount_fallback_logged_)
+        CAIRN_WARN(logger(), "no TF " << base_frame_ << " <- " << laser_frame << " after " << tf_timeout_ << " s ("
+                                      << e.what() << "): using sensor_x/y/yaw (" << mount_.x << ", " << mount_.y
+                                      << ", " << mount_.theta << ")");
+      mount_fallback_logged_ = true;
+      return true;
+    }
+  }
 
   // At most one warning per key and second, with the number of suppressed repeats.
   void warn(const std::string& key, const std::string& what) {
@@ -300,6 +339,11 @@ class PeopleTracker : public cairn::Node {
     }
 
     pt::Pose2 sensor = mount_;
+    if (use_odom_ && !resolveMount(m.header.frame_id, scan.stamp)) {
+      warn("scan_wait_tf", "scan at " + std::to_string(scan.stamp) + ": waiting for TF " + base_frame_ + " <- " +
+                               m.header.frame_id + ", scan ignored");
+      return;
+    }
     if (use_odom_) {
       std::string why;
       const auto robot = robotPoseAt(scan.stamp, why);
@@ -314,14 +358,16 @@ class PeopleTracker : public cairn::Node {
     }
     const std::string frame = use_odom_ ? odom_frame_ : m.header.frame_id;
 
-    std::vector<pt::PersonDetection> dets;
+    std::vector<pt::LegDetection> legs;
     try {
-      dets = detector_->detect(scan);
+      legs = detector_->detectLegs(scan);
     } catch (const pt::InputError& e) {
       warn("scan_invalid", std::string("scan: ") + e.what() + ", scan ignored");
       return;
     }
-    const pt::TrackerStatus st = tracker_->update(scan.stamp, dets, sensor);
+    // Published detections: the detector's own pairing (laser frame); tracking pairs the legs with the tracks.
+    const std::vector<pt::PersonDetection> dets = pt::pairLegs(legs, detector_->params());
+    const pt::TrackerStatus st = tracker_->updateLegs(scan.stamp, legs, sensor, detector_->params());
     if (st.reset) warn("tracker_reset", "tracker reset: " + st.reason);
     last_tracks_ = tracker_->outputTracks();
     last_sensor_ = sensor;
@@ -428,6 +474,12 @@ class PeopleTracker : public cairn::Node {
   bool use_odom_ = true;
   double odom_tolerance_ = 0.2;
   pt::Pose2 mount_;
+  std::string base_frame_;
+  double tf_timeout_ = 1.0;
+  bool mount_from_tf_ = false, mount_fallback_logged_ = false;
+  std::optional<double> first_scan_stamp_;
+  std::shared_ptr<cairn::TransformBuffer> tf_buffer_;
+  std::unique_ptr<cairn::TransformListener> tf_listener_;
   std::string mask_mode_;
   pt::MaskParams mask_;
   std::unique_ptr<pt::PersonDetector> detector_;

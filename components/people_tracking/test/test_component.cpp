@@ -22,6 +22,7 @@
 #include "cairn_people_msgs/srv/Follow.hpp"
 #include "nav_msgs/msg/Odometry.hpp"
 #include "sensor_msgs/msg/LaserScan.hpp"
+#include "tf2_msgs/msg/TFMessage.hpp"
 
 using namespace std::chrono_literals;
 namespace pt = cairn::people_tracking;
@@ -91,6 +92,9 @@ struct World {
   double robot_v = 0.3, robot_w = 0.05;  // m/s, rad/s
   pt::LaserModel laser;
   std::mt19937_64 rng{6};  // seed: issue 6
+  // Laser in base_link: ahead, to the left and turned by 0.3 rad, so a component ignoring the mount misplaces
+  // people at 3 m by ~1 m.
+  pt::Pose2 mount{0.30, 0.10, 0.30};
 
   World() {
     a.position = {2.5, 1.2};
@@ -104,6 +108,23 @@ struct World {
     // exact arc of constant (v, w) from the origin
     const double th = robot_w * t;
     return pt::Pose2{robot_v / robot_w * std::sin(th), robot_v / robot_w * (1 - std::cos(th)), th};
+  }
+  pt::Pose2 laserPose(double t) const {
+    const pt::Pose2 r = robot(t);
+    const Eigen::Vector2d p = r.transform({mount.x, mount.y});
+    return pt::Pose2{p.x(), p.y(), r.theta + mount.theta};
+  }
+  tf2_msgs::msg::TFMessage mountTf() const {
+    geometry_msgs::msg::TransformStamped m;
+    m.header.frame_id = "base_link";
+    m.child_frame_id = "laser";
+    m.transform.translation.x = mount.x;
+    m.transform.translation.y = mount.y;
+    m.transform.rotation.z = std::sin(mount.theta / 2);
+    m.transform.rotation.w = std::cos(mount.theta / 2);
+    tf2_msgs::msg::TFMessage tf;
+    tf.transforms.push_back(m);
+    return tf;
   }
   Eigen::Vector2d personA(double t) const { return Eigen::Vector2d(2.5, 1.2) + va * t; }
   Eigen::Vector2d personB(double t) const { return Eigen::Vector2d(4.5, -1.3) + vb * t; }
@@ -122,7 +143,7 @@ struct World {
     scene.addBox({7.0, 2.5}, 0.4, 0.3, 0.2, pt::ObjectClass::kClutter);
     pt::addWalker(scene, a, 0);
     pt::addWalker(scene, b, 1);
-    return pt::renderScan(scene, robot(t), laser, t, rng).scan;
+    return pt::renderScan(scene, laserPose(t), laser, t, rng).scan;
   }
   nav_msgs::msg::Odometry odomAt(double t) const {
     nav_msgs::msg::Odometry o;
@@ -176,6 +197,8 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
   Heard heard;
   auto scan_pub = sim.create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS::sensor_data());
   auto odom_pub = sim.create_publisher<nav_msgs::msg::Odometry>("odom", cairn::QoS{});
+  // The laser mount comes from TF only (the component's sensor_x/y/yaw stay 0).
+  auto tf_static_pub = sim.create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", cairn::QoS::latched());
   auto tracks_sub = sim.create_subscription<pmsg::TrackedPersons>("people/tracks", cairn::QoS{}, [&](const pmsg::TrackedPersons& m, const cairn::MessageInfo& info) {
     EXPECT_FALSE(info.from_intra_process);
     std::lock_guard l(heard.mu);
@@ -193,13 +216,15 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
   Spinner sim_spinner(sim_exec);
   ASSERT_TRUE(waitFor([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s))
       << "the component's subscriptions were not discovered";
+  World world;
+  tf_static_pub->publish(world.mountTf());
+  ASSERT_TRUE(waitFor([&] { return tf_static_pub->inter_process_subscription_count() > 0; }, 20s));
 
   auto received = [&](double t) {
     std::lock_guard l(heard.mu);
     return heard.tracks.count(key(stampOf(t))) > 0;
   };
 
-  World world;
   const double dt = 1.0 / 15.0;
   const int steps = 75;
   const int select_at = 30;
@@ -286,7 +311,7 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
     if (it == heard.masked.end()) continue;
     const auto& raw = sent[k];
     ASSERT_EQ(it->second.ranges.size(), raw.ranges.size());
-    const auto robot = world.robot(k * dt);
+    const auto robot = world.laserPose(k * dt);
     auto beamTo = [&](const Eigen::Vector2d& p) {
       const Eigen::Vector2d local = robot.inverseTransform(p);
       return static_cast<std::size_t>(std::lround((std::atan2(local.y(), local.x()) - raw.angle_min) / raw.angle_increment));
@@ -302,6 +327,74 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
   }
   EXPECT_GE(checked, 10);
 
+}
+
+// Without TF the component skips scans for tf_timeout seconds of scan time, then uses sensor_x/y/yaw.
+TEST(PeopleTrackerComponent, LaserMountFallsBackToParametersWhenNoTfArrives) {
+  World world;
+  auto ctx = cairn::Context::create();
+  cairn::Executor exec;
+  cairn::ComponentLoader loader;
+  cairn::ComponentManager mgr(ctx, exec, "people_container3", loader);
+  cairn::LoadRequest req{"cairn_people_tracking::PeopleTracker", "people_tracker"};
+  req.parameters["tf_timeout"] = 0.5;
+  req.parameters["base_frame"] = std::string("base_footprint");  // nobody publishes it, whatever is on /tf_static
+  req.parameters["sensor_x"] = world.mount.x;
+  req.parameters["sensor_y"] = world.mount.y;
+  req.parameters["sensor_yaw"] = world.mount.theta;
+  const auto loaded = mgr.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  Spinner spinner(exec);
+
+  auto sim_ctx = cairn::Context::create();
+  cairn::Executor sim_exec;
+  cairn::NodeOptions o("sim", &sim_exec);
+  o.context = sim_ctx;
+  o.start_parameter_services = false;
+  cairn::Node sim(o);
+  Heard heard;
+  auto scan_pub = sim.create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS{});
+  auto odom_pub = sim.create_publisher<nav_msgs::msg::Odometry>("odom", cairn::QoS{});
+  auto tracks_sub = sim.create_subscription<pmsg::TrackedPersons>("people/tracks", cairn::QoS{}, [&](const pmsg::TrackedPersons& m) {
+    std::lock_guard l(heard.mu);
+    heard.tracks[key(m.header.stamp)] = m;
+  });
+  Spinner sim_spinner(sim_exec);
+  ASSERT_TRUE(waitFor([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s));
+  ASSERT_TRUE(waitFor([&] { return tracks_sub->publisher_count_inter_process() > 0; }, 20s));
+
+  const double dt = 1.0 / 15.0;
+  const int steps = 30;
+  for (int k = 0; k < steps; ++k) {
+    const double t = 200.0 + k * dt;
+    pt::LaserScan s = world.scanAt(k * dt, dt);
+    s.stamp = t;
+    auto odom = world.odomAt(k * dt);
+    odom.header.stamp = stampOf(t);
+    odom_pub->publish(odom);
+    scan_pub->publish(toMsg(s));
+    // Reliable and in order: the reply to a processed scan arrives before the next scan is sent.
+    waitFor([&] {
+      std::lock_guard l(heard.mu);
+      return heard.tracks.count(key(stampOf(t))) > 0;
+    }, k * dt < 0.5 ? 200ms : 5s);
+  }
+  sim_spinner.stop();
+  spinner.stop();
+  std::lock_guard l(heard.mu);
+  int matched = 0, processed = 0;
+  for (int k = 0; k < steps; ++k) {
+    const auto it = heard.tracks.find(key(stampOf(200.0 + k * dt)));
+    if (k * dt < 0.5 - 1e-9) {
+      EXPECT_EQ(it, heard.tracks.end()) << "scan " << k << " processed while waiting for TF";
+      continue;
+    }
+    ASSERT_NE(it, heard.tracks.end()) << "scan " << k << " not processed after the TF timeout";
+    ++processed;
+    if (k >= 15 && trackNear(it->second, world.personA(k * dt), 0.35)) ++matched;
+  }
+  EXPECT_GE(processed, 20);
+  EXPECT_GE(matched, 13) << "person A not tracked at its odometry-frame position with the fallback mount";
 }
 
 TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning) {

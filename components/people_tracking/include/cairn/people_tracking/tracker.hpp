@@ -21,7 +21,7 @@ struct TrackerParams {
   Association association = Association::kGnn;
   // Constant-velocity model, x = [px py vx vy]; continuous white-noise acceleration with spectral density
   // process_noise (m^2/s^3): Q = q [dt^3/3 I, dt^2/2 I; dt^2/2 I, dt I].
-  double process_noise = 0.6;
+  double process_noise = 0.3;
   double initial_velocity_sigma = 0.8;  // m/s, velocity std of a new track
   double gate_chi2 = 9.21;              // 99 % gate, chi-square with 2 dof
   int confirm_hits = 2;                 // tentative -> confirmed after this many associated scans
@@ -41,7 +41,7 @@ struct TrackerParams {
   // predicted position, with the leg's spread around the body centre added to the covariance, is within
   // leg_gate_chi2. Confirmed tracks choose first (Hungarian with a "no leg" option per slot); legs nobody took
   // are paired closest-first into new person hypotheses.
-  double leg_spread_sigma = 0.15;  // m, std of a leg centre around the body centre (hip offset + stride)
+  double leg_spread_sigma = 0.20;  // m, std of a leg centre around the body centre (hip offset + stride)
   double leg_gate_chi2 = 9.21;     // 99 % gate, 2 dof
 };
 
