@@ -6,7 +6,10 @@
 #include <cstdio>
 #include <fstream>
 #include <sstream>
+#include <string_view>
+#include <unordered_map>
 
+#include "cairn/sim/carmen.hpp"
 #include "cairn/sim/world.hpp"  // InputError
 
 namespace cairn::graph_slam {
@@ -129,6 +132,92 @@ RelationsResult evaluateRelations(const std::vector<Relation>& relations, std::v
     r.trans_max = *std::max_element(te.begin(), te.end());
     r.rot_max = *std::max_element(re.begin(), re.end());
   }
+  return r;
+}
+
+namespace {
+
+// Key of a scan's readings (exact: corrected logs copy the raw readings verbatim).
+std::string rangesKey(const std::vector<float>& r) {
+  return std::string(reinterpret_cast<const char*>(r.data()), r.size() * sizeof(float));
+}
+
+Pose2 toPose(const sim::Pose2& p) { return Pose2{{p.x, p.y}, p.theta}; }
+
+}  // namespace
+
+std::vector<StampedPose> odometryTrajectory(const std::string& carmen_log) {
+  sim::CarmenReader reader(carmen_log);
+  sim::CarmenRecord rec;
+  std::vector<StampedPose> out;
+  while (reader.next(rec))
+    if (const auto* l = std::get_if<sim::CarmenLaser>(&rec); l != nullptr && l->has_pose)
+      out.push_back({l->scan.stamp, toPose(l->robot_pose)});
+  return out;
+}
+
+TrajectoryAgreement compareWithCorrectedLog(const std::string& corrected_log, const std::string& raw_log,
+                                            const std::vector<StampedPose>& poses, double stamp_tolerance) {
+  std::unordered_map<std::string, double> raw_stamp;
+  Pose2 mount;
+  {
+    sim::CarmenReader reader(raw_log);
+    sim::CarmenRecord rec;
+    bool first = true;
+    while (reader.next(rec)) {
+      const auto* l = std::get_if<sim::CarmenLaser>(&rec);
+      if (l == nullptr) continue;
+      raw_stamp.emplace(rangesKey(l->scan.ranges), l->scan.stamp);
+      if (first && l->has_pose) mount = compose(inverse(toPose(l->robot_pose)), toPose(l->laser_pose));
+      first = false;
+    }
+  }
+  std::vector<StampedPose> sorted = poses;
+  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.stamp < b.stamp; });
+  std::vector<std::pair<Pose2, Pose2>> pairs;  // (estimate as laser pose, corrected laser pose)
+  TrajectoryAgreement r;
+  sim::CarmenReader reader(corrected_log);
+  sim::CarmenRecord rec;
+  while (reader.next(rec)) {
+    const auto* l = std::get_if<sim::CarmenLaser>(&rec);
+    if (l == nullptr || !l->has_pose) continue;
+    ++r.corrected_scans;
+    const auto it = raw_stamp.find(rangesKey(l->scan.ranges));
+    if (it == raw_stamp.end()) continue;
+    const double t = it->second;
+    auto p = std::lower_bound(sorted.begin(), sorted.end(), t - stamp_tolerance,
+                              [](const StampedPose& a, double s) { return a.stamp < s; });
+    if (p == sorted.end() || p->stamp > t + stamp_tolerance) continue;
+    pairs.emplace_back(compose(p->pose, mount), toPose(l->laser_pose));
+  }
+  r.matched = pairs.size();
+  if (pairs.size() < 2) return r;
+  // Least-squares rigid alignment of the estimate onto the corrected positions (2D Horn/Umeyama).
+  Eigen::Vector2d ca = Eigen::Vector2d::Zero(), cb = Eigen::Vector2d::Zero();
+  for (const auto& [a, b] : pairs) {
+    ca += a.t;
+    cb += b.t;
+  }
+  ca /= static_cast<double>(pairs.size());
+  cb /= static_cast<double>(pairs.size());
+  double sxx = 0.0, sxy = 0.0;
+  for (const auto& [a, b] : pairs) {
+    const Eigen::Vector2d u = a.t - ca, v = b.t - cb;
+    sxx += u.dot(v);
+    sxy += u.x() * v.y() - u.y() * v.x();
+  }
+  const double rot = std::atan2(sxy, sxx);
+  const Eigen::Matrix2d R = rotation2(rot);
+  double se = 0.0, sh = 0.0;
+  for (const auto& [a, b] : pairs) {
+    const double e = (R * (a.t - ca) + cb - b.t).norm();
+    se += e * e;
+    r.ate_max = std::max(r.ate_max, e);
+    const double h = normalizeAngle(a.theta + rot - b.theta);
+    sh += h * h;
+  }
+  r.ate_rmse = std::sqrt(se / static_cast<double>(pairs.size()));
+  r.heading_rmse = std::sqrt(sh / static_cast<double>(pairs.size()));
   return r;
 }
 

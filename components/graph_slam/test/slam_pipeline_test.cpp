@@ -352,6 +352,50 @@ TEST(SlamTool, EvalPrintsJsonAndRejectsBadInput) {
   EXPECT_EQ(runTool("eval --bogus", out), 2);
 }
 
+TEST(Relations, CorrectedLogAgreementMatchesScansByReadingsAndAlignsRigidly) {
+  const fs::path d = tempDir("corrected");
+  // Raw log: four scans (distinct readings) with odometry poses; corrected log: three of them, another time base,
+  // corrected poses that are a rigid transform of the truth. Poses file = the truth in our own frame.
+  const std::vector<gs::Pose2> truth = {{{0, 0}, 0.0}, {{1, 0}, 0.1}, {{2, 0.5}, 0.3}, {{2.5, 1.5}, 0.9}};
+  const gs::Pose2 g{{10.0, -3.0}, 1.2};
+  std::string raw, corrected, poses;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    char buf[512];
+    const double r0 = 1.0 + 0.1 * static_cast<double>(i);
+    const double t = 100.0 + static_cast<double>(i);
+    std::snprintf(buf, sizeof buf, "FLASER 3 %.2f 2.00 3.00 %.3f %.3f %.3f %.3f %.3f %.3f %.6f nohost %.6f\n", r0,
+                  truth[i].t.x() + 0.05 * i, truth[i].t.y(), truth[i].theta, truth[i].t.x() + 0.05 * i, truth[i].t.y(),
+                  truth[i].theta, t, t);
+    raw += buf;
+    if (i != 1) {
+      const gs::Pose2 c = gs::compose(g, truth[i]);
+      std::snprintf(buf, sizeof buf, "FLASER 3 %.2f 2.00 3.00 %.6f %.6f %.6f 0 0 0 %.6f nohost %.6f\n", r0, c.t.x(),
+                    c.t.y(), c.theta, 5.0 + static_cast<double>(i), 5.0 + static_cast<double>(i));
+      corrected += buf;
+    }
+    std::snprintf(buf, sizeof buf, "%.6f %.9f %.9f %.9f\n", t, truth[i].t.x(), truth[i].t.y(), truth[i].theta);
+    poses += buf;
+  }
+  writeText(d / "raw.clf", raw);
+  writeText(d / "corrected.log", corrected);
+  writeText(d / "poses.txt", poses);
+  auto est = gs::readPoses((d / "poses.txt").string());
+  gs::TrajectoryAgreement a = gs::compareWithCorrectedLog((d / "corrected.log").string(), (d / "raw.clf").string(), est);
+  EXPECT_EQ(a.corrected_scans, 3u);
+  EXPECT_EQ(a.matched, 3u);
+  EXPECT_NEAR(a.ate_rmse, 0.0, 1e-5);
+  EXPECT_NEAR(a.heading_rmse, 0.0, 1e-5);
+  est[3].pose.t.x() += 0.3;  // one pose off by 0.3 m: nonzero error, bounded by it
+  a = gs::compareWithCorrectedLog((d / "corrected.log").string(), (d / "raw.clf").string(), est);
+  EXPECT_GT(a.ate_rmse, 0.05);
+  EXPECT_LT(a.ate_max, 0.3);
+  // The raw odometry trajectory: one pose per scan, odometry (drifting by 5 cm per scan here).
+  const auto odo = gs::odometryTrajectory((d / "raw.clf").string());
+  ASSERT_EQ(odo.size(), 4u);
+  EXPECT_NEAR(odo[2].pose.t.x(), 2.1, 1e-9);
+  EXPECT_THROW(gs::compareWithCorrectedLog((d / "none.log").string(), (d / "raw.clf").string(), est), cairn::sim::InputError);
+}
+
 TEST(MapExport, PgmYamlAndPngFollowMapServerConventions) {
   gs::OccupancyGrid g;
   g.resolution = 0.1;

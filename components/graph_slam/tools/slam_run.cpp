@@ -35,10 +35,29 @@ int fail(const std::string& what) {
   return 2;
 }
 
+void relationsJson(JsonObject& j, const gs::RelationsResult& r) {
+  j.integer("relations", static_cast<long long>(r.relations))
+      .integer("used", static_cast<long long>(r.used))
+      .integer("missing", static_cast<long long>(r.missing))
+      .num("trans_mean_m", r.trans_mean)
+      .num("trans_std_m", r.trans_std)
+      .num("trans_max_m", r.trans_max)
+      .num("rot_mean_deg", r.rot_mean * kRadToDeg)
+      .num("rot_std_deg", r.rot_std * kRadToDeg)
+      .num("rot_max_deg", r.rot_max * kRadToDeg);
+}
+
+void printRelations(const char* what, const gs::RelationsResult& r) {
+  std::printf("%srelations: %zu used of %zu\n", what, r.used, r.relations);
+  std::printf("%stranslational error: %.4f +- %.4f m (max %.4f)\n", what, r.trans_mean, r.trans_std, r.trans_max);
+  std::printf("%srotational error:    %.3f +- %.3f deg (max %.3f)\n", what, r.rot_mean * kRadToDeg,
+              r.rot_std * kRadToDeg, r.rot_max * kRadToDeg);
+}
+
 }  // namespace
 
 int slamEvalVerb(const std::vector<std::string>& args) {
-  std::string relations_path, poses_path;
+  std::string relations_path, poses_path, odometry_log, corrected_log, raw_log;
   bool json = false;
   bool allow_missing = false;
   gs::RelationsOptions opt;
@@ -54,40 +73,55 @@ int slamEvalVerb(const std::vector<std::string>& args) {
       else if (a == "--json") json = true;
       else if (a == "--allow-missing") allow_missing = true;
       else if (a == "--stamp-tolerance") opt.stamp_tolerance = cairn::slam_cli::parseDouble(value(), "--stamp-tolerance");
+      else if (a == "--odometry-baseline") odometry_log = value();
+      else if (a == "--corrected") corrected_log = value();
+      else if (a == "--carmen") raw_log = value();
       else throw std::invalid_argument("eval: unknown option '" + a + "'");
     }
-    if (relations_path.empty() || poses_path.empty()) throw std::invalid_argument("eval needs --relations and --poses");
+    if (poses_path.empty()) throw std::invalid_argument("eval needs --poses");
+    if (relations_path.empty() && corrected_log.empty())
+      throw std::invalid_argument("eval needs --relations and/or --corrected <log> --carmen <raw log>");
+    if (!corrected_log.empty() && raw_log.empty()) throw std::invalid_argument("--corrected needs --carmen <raw log>");
   } catch (const std::exception& e) {
     return fail(e.what());
   }
   try {
-    const auto relations = gs::readRelations(relations_path);
     const auto poses = gs::readPoses(poses_path);
-    const gs::RelationsResult r = gs::evaluateRelations(relations, poses, opt);
-    if (r.missing > 0 && !allow_missing)
-      return fail(relations_path + ":" + std::to_string(r.first_missing_line) + ": " + std::to_string(r.missing) +
-                  " of " + std::to_string(r.relations) + " relations have a stamp without a pose in " + poses_path +
-                  " (--allow-missing skips them)");
-    if (r.used == 0) return fail(relations_path + ": no relation could be evaluated");
-    if (json) {
-      std::cout << JsonObject()
-                       .integer("relations", static_cast<long long>(r.relations))
-                       .integer("used", static_cast<long long>(r.used))
-                       .integer("missing", static_cast<long long>(r.missing))
-                       .num("trans_mean_m", r.trans_mean)
-                       .num("trans_std_m", r.trans_std)
-                       .num("trans_max_m", r.trans_max)
-                       .num("rot_mean_deg", r.rot_mean * kRadToDeg)
-                       .num("rot_std_deg", r.rot_std * kRadToDeg)
-                       .num("rot_max_deg", r.rot_max * kRadToDeg)
-                       .text()
-                << "\n";
-    } else {
-      std::printf("relations: %zu used of %zu\n", r.used, r.relations);
-      std::printf("translational error: %.4f +- %.4f m (max %.4f)\n", r.trans_mean, r.trans_std, r.trans_max);
-      std::printf("rotational error:    %.3f +- %.3f deg (max %.3f)\n", r.rot_mean * kRadToDeg,
-                  r.rot_std * kRadToDeg, r.rot_max * kRadToDeg);
+    JsonObject j;
+    if (!relations_path.empty()) {
+      const auto relations = gs::readRelations(relations_path);
+      const gs::RelationsResult r = gs::evaluateRelations(relations, poses, opt);
+      if (r.missing > 0 && !allow_missing)
+        return fail(relations_path + ":" + std::to_string(r.first_missing_line) + ": " + std::to_string(r.missing) +
+                    " of " + std::to_string(r.relations) + " relations have a stamp without a pose in " + poses_path +
+                    " (--allow-missing skips them)");
+      if (r.used == 0) return fail(relations_path + ": no relation could be evaluated");
+      relationsJson(j, r);
+      if (!json) printRelations("", r);
+      if (!odometry_log.empty()) {
+        // Same-run baseline: the log's raw odometry scored on the same relations.
+        const gs::RelationsResult o = gs::evaluateRelations(relations, gs::odometryTrajectory(odometry_log), opt);
+        JsonObject oj;
+        relationsJson(oj, o);
+        j.raw("odometry_baseline", oj.text());
+        if (!json) printRelations("odometry baseline ", o);
+      }
     }
+    if (!corrected_log.empty()) {
+      const gs::TrajectoryAgreement a = gs::compareWithCorrectedLog(corrected_log, raw_log, poses, opt.stamp_tolerance);
+      if (a.matched < 2) return fail(corrected_log + ": fewer than 2 of its scans were found in " + raw_log + " and " + poses_path);
+      JsonObject cj;
+      cj.integer("corrected_scans", static_cast<long long>(a.corrected_scans))
+          .integer("matched", static_cast<long long>(a.matched))
+          .num("ate_rmse_m", a.ate_rmse)
+          .num("ate_max_m", a.ate_max)
+          .num("heading_rmse_deg", a.heading_rmse * kRadToDeg);
+      j.raw("corrected_log", cj.text());
+      if (!json)
+        std::printf("corrected log: %zu of %zu scans matched, ATE %.3f m RMSE (max %.3f), heading %.2f deg RMSE\n",
+                    a.matched, a.corrected_scans, a.ate_rmse, a.ate_max, a.heading_rmse * kRadToDeg);
+    }
+    if (json) std::cout << j.text() << "\n";
     return 0;
   } catch (const cairn::sim::InputError& e) {
     return fail(e.what());

@@ -54,4 +54,24 @@ struct RelationsResult {
 RelationsResult evaluateRelations(const std::vector<Relation>& relations, std::vector<StampedPose> poses,
                                   const RelationsOptions& options = {});
 
+/// Raw odometry of a CARMEN log as a trajectory: the robot (odometry) pose of every laser scan, stamped with the
+/// scan's ipc timestamp (the same-run baseline of `cairn slam eval`). Throws sim::InputError (file:line).
+std::vector<StampedPose> odometryTrajectory(const std::string& carmen_log);
+
+struct TrajectoryAgreement {
+  std::size_t corrected_scans = 0;  ///< laser scans in the corrected log
+  std::size_t matched = 0;          ///< of those, found in the raw log (identical ranges) and in the poses
+  double ate_rmse = 0.0;            ///< m, position RMSE after the best rigid 2D alignment
+  double ate_max = 0.0;             ///< m
+  double heading_rmse = 0.0;        ///< rad, after the alignment
+};
+
+/// Agreement of a trajectory with a "corrected" log (Radish/ple logs whose FLASER poses are a SLAM-corrected
+/// trajectory of a subset of the raw log's scans, with their own time base): corrected scans are matched to
+/// raw scans by identical range readings, the raw scan's stamp selects the pose, poses are turned into laser
+/// poses with the raw log's laser mount, and the absolute trajectory error is taken after the least-squares
+/// rigid alignment (Horn/Umeyama in 2D). Throws sim::InputError for unreadable logs.
+TrajectoryAgreement compareWithCorrectedLog(const std::string& corrected_log, const std::string& raw_log,
+                                            const std::vector<StampedPose>& poses, double stamp_tolerance = 1e-4);
+
 }  // namespace cairn::graph_slam
