@@ -11,6 +11,7 @@
 
 #include "cairn/people_tracking/classifier.hpp"
 #include "tool_bench.hpp"
+#include "tool_mask_bench.hpp"
 
 
 using namespace cairn::people_tracking;
@@ -79,7 +80,8 @@ void usage() {
       "  train --kind adaboost|svm [--features arras14@1|stuede5@1] [--scenes 1500] [--seed 1] --out FILE\n"
       "  eval  --model FILE [--scenes 500] [--seed 1000003] [--json]\n"
       "  bench --world auto --trajectories FILE [--robot-path FILE] [--seed N] [--duration S] [--max-people N]\n"
-      "        [--association gnn|jpda] [--model FILE] [--rate HZ] [--start S] [--dump DIR] [--json]");
+      "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S] [--dump DIR] [--json]\n"
+      "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--json]");
 }
 
 int train(const Args& a) {
@@ -144,6 +146,11 @@ int main(int argc, char** argv) {
     if (verb == "train") return train(parse(argc, argv, 2, {}));
     if (verb == "eval") return eval(parse(argc, argv, 2, {"json"}));
     if (verb == "bench") return runBenchVerb(argc, argv);
+#ifdef CAIRN_PEOPLE_MASK_BENCH
+    if (verb == "mask-bench") return runMaskBenchVerb(argc, argv);
+#else
+    if (verb == "mask-bench") fail("mask-bench was not built (needs the graph_slam and sim components)");
+#endif
 
   } catch (const std::exception& e) {
     fail(e.what());
