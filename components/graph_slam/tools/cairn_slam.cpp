@@ -31,8 +31,13 @@ constexpr const char* kUsage =
     "                           [--fix-information reject|clamp] [--skip-unknown-tags] [--threads N]\n"
     "  KERNEL: none, huber, cauchy, gm (Geman-McClure), dcs (dynamic covariance scaling);\n"
     "          gnc[:C2] runs graduated non-convexity over the loop closures instead\n"
-    "       cairn slam eval --relations <file> --poses <poses.txt> [--json] [--allow-missing]\n"
-    "                       [--stamp-tolerance S]   Kuemmerle et al. 2009 relative-pose error\n"
+    "       cairn slam run --carmen <log> --out <dir> [--config f.yaml] [--set key=value]... [--load state.cslam]\n"
+    "                      [--limit N] [--laser-mount auto|zero] [--skip-malformed] [--quiet] [--json]\n"
+    "                      offline SLAM: poses.txt, graph.g2o, map.pgm/.yaml/.png, state.cslam, summary.json\n"
+    "       cairn slam eval --poses <poses.txt> [--relations <file>] [--odometry-baseline <raw log>]\n"
+    "                       [--corrected <corrected log> --carmen <raw log>] [--json] [--allow-missing]\n"
+    "                       [--stamp-tolerance S]   Kuemmerle et al. 2009 relative-pose error, corrected-log ATE\n"
+    "       cairn slam params [--markdown]          the SLAM parameters (--config keys = component params)\n"
     "       cairn slam train-verifier --logs a.log.gz[,b...] --out model.yml.gz [--weak-count 50] [--seed N] [--json]\n"
     "       cairn slam eval-verifier --model model.yml.gz --logs c.log.gz [--threshold T] [--json]\n";
 
@@ -197,6 +202,7 @@ int main(int argc, char** argv) {
   if (verb == "optimize") return optimizeVerb(args);
   if (verb == "run") return slamRunVerb(args);
   if (verb == "eval") return slamEvalVerb(args);
+  if (verb == "params") return slamParamsVerb(args);
   if (verb == "train-verifier") return trainVerifierVerb(args);
   if (verb == "eval-verifier") return evalVerifierVerb(args);
   return usageError("unknown verb '" + verb + "'");

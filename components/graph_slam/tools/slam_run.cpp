@@ -2,6 +2,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -238,6 +239,7 @@ int slamRunVerb(const std::vector<std::string>& args) {
       if (malformed_warnings++ < 5) std::fprintf(stderr, "\ncairn: slam: skipping %s\n", w.what());
     };
     const auto t0 = std::chrono::steady_clock::now();
+    const std::clock_t cpu0 = std::clock();
     const LogScan info = scanLog(log, ropt);
     malformed_warnings = 0;
     std::size_t total = info.lasers;
@@ -266,6 +268,7 @@ int slamRunVerb(const std::vector<std::string>& args) {
     }
     slam.finish();
     const double runtime = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double cpu = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
     if (!quiet) std::fprintf(stderr, "\n");
     if (done == 0) return fail(log + ": no laser scans");
     const std::filesystem::path dir(out_dir);
@@ -298,6 +301,8 @@ int slamRunVerb(const std::vector<std::string>& args) {
         .num("data_duration_s", duration)
         .num("runtime_s", runtime)
         .num("real_time_factor", runtime > 0 ? duration / runtime : 0.0)
+        .num("cpu_s", cpu)
+        .num("real_time_factor_cpu", cpu > 0 ? duration / cpu : 0.0)
         .num("local_time_s", st.local_time_s)
         .num("loop_time_s", st.loop_time_s)
         .num("optimize_time_s", st.optimize_time_s)
@@ -322,4 +327,30 @@ int slamRunVerb(const std::vector<std::string>& args) {
   } catch (const std::exception& e) {
     return fail(e.what());
   }
+}
+
+int slamParamsVerb(const std::vector<std::string>& args) {
+  bool markdown = false;
+  for (const auto& a : args) {
+    if (a == "--markdown") markdown = true;
+    else return fail("params: unknown option '" + a + "'");
+  }
+  const gs::SlamOptions defaults;
+  if (markdown) std::printf("| key | default | range | what |\n|---|---|---|---|\n");
+  for (const gs::SlamParam& p : gs::slamParameters()) {
+    std::string range;
+    if (p.min > -1e299 || p.max < 1e299) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "[%g, %g]", p.min, p.max);
+      range = buf;
+    }
+    const std::string value = gs::slamParameterText(defaults, p);
+    if (markdown)
+      std::printf("| `%s` | %s | %s | %s |\n", p.name.c_str(), value.empty() ? "\"\"" : value.c_str(), range.c_str(),
+                  p.description.c_str());
+    else
+      std::printf("%-28s %-10s %-14s %s\n", p.name.c_str(), value.empty() ? "\"\"" : value.c_str(), range.c_str(),
+                  p.description.c_str());
+  }
+  return 0;
 }

@@ -9,3 +9,5 @@ int slamRunVerb(const std::vector<std::string>& args);   // tools/slam_run.cpp
 int slamEvalVerb(const std::vector<std::string>& args);  // tools/slam_run.cpp
 int trainVerifierVerb(const std::vector<std::string>& args);  // tools/train_verifier.cpp: cairn slam train-verifier
 int evalVerifierVerb(const std::vector<std::string>& args);   // tools/train_verifier.cpp: cairn slam eval-verifier
+/// `cairn slam params [--markdown]`: the SLAM parameter table (config keys = component parameters)
+int slamParamsVerb(const std::vector<std::string>& args);
