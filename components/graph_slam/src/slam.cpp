@@ -234,6 +234,7 @@ std::optional<LoopMatch> GraphSlam::Impl::matchSubmap(const LoopQuery& q, std::i
   const SlamSubmap& sm = submaps[static_cast<std::size_t>(si)];
   SubmapCache& c = cache(si);
   ++stats.loop_matches;
+  if (q.node >= 0) attempts.push_back({q.node, target, false, false});
   // Pose of k in the submap's grid frame (same local frame), and the query's predicted pose there.
   const Pose2 sub_k = between(sm.local_pose, k.local_pose);
   const Pose2 predicted = compose(sub_k, between(k.global_pose, q.global_guess));
@@ -294,6 +295,7 @@ std::optional<LoopMatch> GraphSlam::Impl::matchSubmap(const LoopQuery& q, std::i
   lm.implied_query_global = compose(k.global_pose, lm.z);
   lm.implied_map_to_local = compose(lm.implied_query_global, inverse(q.local_pose));
   lm.query = q.node;
+  if (q.node >= 0) attempts.back().matched = true;
   return lm;
 }
 
@@ -440,6 +442,11 @@ void GraphSlam::Impl::addLoopEdge(std::int64_t node, const LoopMatch& m) {
   const std::size_t f = graph.addBetween2(e.from, e.to, e.z, e.information);
   graph.setRobustKernel(f, loop_kernel);
   edges.push_back(e);
+  for (auto it = attempts.rbegin(); it != attempts.rend(); ++it)
+    if (it->query == node && it->target == m.target) {
+      it->accepted = true;
+      break;
+    }
   ++stats.loops_accepted;
 }
 
@@ -607,6 +614,19 @@ const PoseGraph& GraphSlam::graph() const { return impl_->graph; }
 const SlamStats& GraphSlam::stats() const { return impl_->stats; }
 const SlamOptions& GraphSlam::options() const { return impl_->options; }
 const std::string& GraphSlam::lastError() const { return impl_->last_error; }
+
+LoopRecall GraphSlam::loopRecall(double max_distance) const {
+  LoopRecall r;
+  for (const LoopAttempt& a : impl_->attempts) {
+    const auto& q = impl_->nodes[static_cast<std::size_t>(a.query)].global_pose;
+    const auto& t = impl_->nodes[static_cast<std::size_t>(a.target)].global_pose;
+    if ((q.t - t.t).norm() > max_distance) continue;
+    ++r.revisits;
+    r.matched += a.matched ? 1 : 0;
+    r.accepted += a.accepted ? 1 : 0;
+  }
+  return r;
+}
 
 std::size_t GraphSlam::inconsistentLoops(double max_translation, double max_rotation) const {
   std::size_t bad = 0;

@@ -39,6 +39,13 @@ struct LoopMatch {
   std::int64_t query = -1;     ///< query node (-1: localization query)
 };
 
+/// A geometric match attempt (for the recall measure): query node, candidate node, outcome.
+struct LoopAttempt {
+  std::int64_t query = -1, target = -1;
+  bool matched = false;   ///< branch and bound + refinement passed
+  bool accepted = false;  ///< became a loop edge
+};
+
 struct SubmapCache {
   std::unique_ptr<BranchAndBoundMatcher> bnb;  ///< built when first matched (finished submaps only)
   std::vector<float> distance;                 ///< m to the nearest occupied cell, grid layout; empty until needed
@@ -67,6 +74,7 @@ struct GraphSlam::Impl {
   std::vector<SubmapCache> caches;
   std::vector<SlamEdge> edges;
   std::vector<ScanRecord> records;
+  std::vector<LoopAttempt> attempts;
   std::vector<StampedPose> localization_poses;  ///< localization mode: poses of scans (no nodes)
   PoseGraph graph;
   Optimizer optimizer;

@@ -188,6 +188,41 @@ TEST(GraphSlam, SaveLoadRoundTripAndBrokenFilesGiveClearErrors) {
   EXPECT_THROW(gs::GraphSlam::load((d / "missing.cslam").string(), simOptions()), std::runtime_error);
 }
 
+TEST(GraphSlam, ContinuesMappingInANewSessionLinkedByAGlobalSearch) {
+  const SimRun& run = outAndBack();
+  gs::GraphSlam first(simOptions());
+  const std::size_t half = run.scans.size() / 2;
+  feed(first, run, 0, half);
+  first.finish();
+  const fs::path d = tempDir("multisession");
+  first.save((d / "map.cslam").string());
+  gs::GraphSlam second = gs::GraphSlam::load((d / "map.cslam").string(), simOptions());
+  const std::size_t old_nodes = second.nodes().size();
+  EXPECT_FALSE(second.localized());
+  feed(second, run, half, run.scans.size());
+  second.finish();
+  EXPECT_TRUE(second.localized());
+  EXPECT_GT(second.nodes().size(), old_nodes);  // the map grew
+  // Loop edges join the new trajectory to the old one, and none disagrees with the final solution.
+  std::size_t cross = 0;
+  for (const auto& e : second.edges())
+    if (e.kind == gs::EdgeKind::kLoop &&
+        second.nodes()[static_cast<std::size_t>(e.from)].trajectory != second.nodes()[static_cast<std::size_t>(e.to)].trajectory)
+      ++cross;
+  EXPECT_GE(cross, 3u);
+  EXPECT_EQ(second.inconsistentLoops(), 0u);
+  // The new session's last pose is where the truth is (both sessions share the old map frame).
+  const auto map_traj = first.trajectory();
+  const gs::Pose2 t0 = toGs(nearest(run.truth, map_traj.front().stamp).pose);
+  const gs::Pose2 align = gs::compose(t0, gs::inverse(map_traj.front().pose));
+  const gs::Pose2 est = gs::compose(align, second.currentPose());
+  EXPECT_LT((est.t - toGs(nearest(run.truth, run.scans.back().stamp).pose).t).norm(), 0.3);
+  const gs::LoopRecall recall = second.loopRecall();
+  EXPECT_GT(recall.revisits, 0u);
+  EXPECT_LE(recall.accepted, recall.matched);
+  EXPECT_LE(recall.matched, recall.revisits);
+}
+
 TEST(GraphSlam, LocalizesOnALoadedMapWithoutGrowingIt) {
   const SimRun& run = outAndBack();
   gs::GraphSlam mapping(simOptions());

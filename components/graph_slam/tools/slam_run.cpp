@@ -283,6 +283,7 @@ int slamRunVerb(const std::vector<std::string>& args) {
     gs::writeMapPng(map, path, (dir / "map.png").string(), loops);
     slam.save((dir / "state.cslam").string());
     const gs::SlamStats& st = slam.stats();
+    const gs::LoopRecall recall = slam.loopRecall();
     const double duration = last_stamp - first_stamp;
     JsonObject j;
     j.str("log", log)
@@ -297,6 +298,11 @@ int slamRunVerb(const std::vector<std::string>& args) {
         .integer("loops_accepted", static_cast<long long>(st.loops_accepted))
         .integer("loops_rejected", static_cast<long long>(st.loops_rejected))
         .integer("loops_inconsistent", static_cast<long long>(slam.inconsistentLoops()))
+        .num("loop_precision", st.loops_accepted > 0 ? 1.0 - static_cast<double>(slam.inconsistentLoops()) /
+                                                               static_cast<double>(st.loops_accepted)
+                                                         : 0.0)
+        .integer("revisit_attempts", static_cast<long long>(recall.revisits))
+        .num("revisit_recall", recall.revisits > 0 ? static_cast<double>(recall.accepted) / static_cast<double>(recall.revisits) : 0.0)
         .integer("optimizations", static_cast<long long>(st.optimizations))
         .num("data_duration_s", duration)
         .num("runtime_s", runtime)

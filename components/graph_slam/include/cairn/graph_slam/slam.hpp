@@ -180,6 +180,12 @@ struct ScanUpdate {
   bool localized = true;  ///< false while a new session is not yet linked to the loaded map
 };
 
+/// Recall of the loop closing on true revisits: of the geometric match attempts whose query and candidate nodes
+/// are within `max_distance` in the final solution (the same place), how many matched and how many became loops.
+struct LoopRecall {
+  std::size_t revisits = 0, matched = 0, accepted = 0;
+};
+
 class GraphSlam {
  public:
   /// Throws std::runtime_error if the verifier model cannot be loaded (use_verifier).
@@ -223,6 +229,7 @@ class GraphSlam {
   /// Loop edges whose constraint disagrees with the current (final) solution by more than these bounds
   /// (translation m, rotation rad): the precision measure of issue 5.
   std::size_t inconsistentLoops(double max_translation = 0.3, double max_rotation = 0.0524) const;
+  LoopRecall loopRecall(double max_distance = 1.0) const;
 
   /// Saves the whole state (options that shape the map, nodes with scans, edges, submap membership, scan
   /// records) in a versioned binary file. Throws std::runtime_error "path: what".
