@@ -23,8 +23,10 @@ struct FactorSlots {
 class BlockSystem {
  public:
   /// Builds pattern, block AMD ordering and symbolic factorization. gauge: a variable index treated as fixed.
-  /// ordering: 0 auto (AMD vs METIS, less fill wins), 1 AMD, 2 METIS nested dissection.
-  void build(const PoseGraph& graph, std::optional<std::size_t> gauge, int ordering = 0, int factorization = 0);
+  /// ordering: 0 auto (AMD; METIS nested dissection too when the predicted factorization flops exceed
+  /// nd_min_flops_per_block per variable block, fewer flops wins), 1 AMD, 2 METIS nested dissection.
+  void build(const PoseGraph& graph, std::optional<std::size_t> gauge, int ordering = 0, int factorization = 0,
+             double nd_min_flops_per_block = 5e4);
 
   int size() const { return n_; }
   /// Scalar offset of variable v in the system, or -1 if it is fixed / the gauge.

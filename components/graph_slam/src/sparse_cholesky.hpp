@@ -34,6 +34,10 @@ class SparseCholesky {
   bool analyzed() const { return l_ != nullptr; }
   /// Numeric factorization; false if the matrix is not positive definite.
   bool factorize();
+  /// Upper bound on the OpenMP threads CHOLMOD's supernodal kernels may use (>= 1). CHOLMOD 3 hard-codes
+  /// num_threads(4) in its assembly loops; the cap is applied around each call through the OpenMP runtime's
+  /// dynamic adjustment (no effect when CHOLMOD was built without OpenMP).
+  void setMaxThreads(int threads) { max_threads_ = threads < 1 ? 1 : threads; }
   /// Solves A X = B for ncols right-hand sides stored column-major (n x ncols).
   void solve(const double* b, double* x, int ncols = 1);
   /// y = A x (A symmetric, upper stored).
@@ -55,15 +59,17 @@ class SparseCholesky {
   cholmod_dense* x_ = nullptr;
   cholmod_dense* y_ = nullptr;
   cholmod_dense* e_ = nullptr;
+  int max_threads_ = 1;
   int symbolic_analyses_ = 0;
   int numeric_factorizations_ = 0;
 };
 
 /// Fill-reducing ordering of a symmetric pattern (CSC, both triangles or one, diagonal optional):
 /// method 0 = try AMD and METIS nested dissection and keep the one CHOLMOD predicts less fill / fewer flops
-/// for, 1 = AMD only, 2 = METIS only. Returns perm (new position k holds old index perm[k]).
+/// for, 1 = AMD only, 2 = METIS only. Returns perm (new position k holds old index perm[k]); *flops (if
+/// given) gets CHOLMOD's predicted factorization flop count of the pattern under that ordering.
 std::vector<int> fillReducingOrdering(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx,
-                                      int method);
+                                      int method, double* flops = nullptr);
 
 /// Solves the SPD system A X = B given the upper triangle of A as triplets (duplicates summed).
 /// Throws std::runtime_error if A is not positive definite.

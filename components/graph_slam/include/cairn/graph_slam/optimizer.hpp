@@ -20,9 +20,10 @@ namespace cairn::graph_slam {
 
 enum class Algorithm { kLevenbergMarquardt, kGaussNewton, kDogleg };
 
-/// Fill-reducing ordering of the variable blocks: kAuto tries AMD and METIS nested dissection on the block
-/// graph and keeps the one with less predicted fill. The default is AMD: on the benchmark pose graphs METIS
-/// saved < 1 % fill but cost up to 1.5 iterations of ordering time per structure change.
+/// Fill-reducing ordering of the variable blocks. kAuto (default): AMD, and where the predicted factorization
+/// cost per variable block exceeds OptimizerOptions::nd_min_flops_per_block also METIS nested dissection,
+/// keeping the one with fewer predicted flops (3D tori/spheres: -27..-34 % flops; 2D benchmark graphs stay
+/// on AMD, where METIS's ordering time exceeds its gain).
 enum class Ordering { kAuto, kAmd, kNestedDissection };
 
 /// CHOLMOD factorization kind; kAuto lets CHOLMOD choose from the flop count per factor nonzero.
@@ -44,12 +45,32 @@ struct OptimizerOptions {
   double initial_lambda = 1e-4;
   /// Dogleg: initial trust-region radius.
   double initial_radius = 1e4;
-  Ordering ordering = Ordering::kAmd;
+  Ordering ordering = Ordering::kAuto;
+  /// kAuto: try nested dissection when the AMD factorization is predicted to cost more than this many flops
+  /// per variable block.
+  double nd_min_flops_per_block = 5e4;
   Factorization factorization = Factorization::kAuto;
   /// Threads for linearization / cost evaluation (>= 1).
   int num_threads = 2;
+  /// Cap on the OpenMP threads CHOLMOD's supernodal factorization may use (>= 1). CHOLMOD 3 asks for 4; on the
+  /// 2-core benchmark machine 1 was 1.8-2x faster (README "Linear algebra").
+  int factorization_threads = 1;
   /// Reuse the last LM damping / dogleg radius when optimizing the same structure again (incremental use).
   bool warm_start_damping = false;
+  /// Step extension: after an accepted step whose actual decrease exceeds extension_ratio x the predicted
+  /// one, up to this many cost evaluations try longer steps along the same direction (quadratic line-search
+  /// fit); 0 disables.
+  int step_extension = 3;
+  double extension_ratio = 1.2;
+  /// Dogleg: when a step truncated by the trust region lowered the cost, up to this many cost evaluations try
+  /// the dogleg steps for 2x, 4x, ... the radius (until the Gauss-Newton step) and keep the best; 0 disables.
+  int dogleg_lookahead = 4;
+  /// LM / dogleg: up to this many consecutive steps may reuse the previous point's factorization
+  /// (h = -L^-1 g, kept when actual/predicted decrease > 0.25 and it pays per unit of work); 0 disables.
+  int factor_reuse = 8;
+  /// Reuse only where a fresh step costs at least this many times a reused one (flop proxy: CHOLMOD's
+  /// factorization flops vs solves + linearization); skips small graphs where factorizing is cheap.
+  double factor_reuse_min_gain = 4.0;
   /// Print one line per iteration (cost, step, damping / radius) to stderr.
   bool trace = false;
 };
@@ -63,6 +84,8 @@ struct OptimizerSummary {
   double final_cost = 0.0;
   int iterations = 0;         ///< linear solves (accepted and rejected steps)
   int accepted_steps = 0;
+  int extended_steps = 0;     ///< accepted steps lengthened by the step extension
+  int reused_factorizations = 0;  ///< accepted steps solved with the previous point's factorization
   bool converged = false;
   std::string termination;
   double time_s = 0.0;
