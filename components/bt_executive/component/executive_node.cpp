@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -22,13 +23,26 @@
 
 #include "cairn/bt_executive/executive.hpp"
 #include "cairn/bt_executive/factory.hpp"
+#include "cairn/bt_executive/monitoring.hpp"
 #include "cairn/bt_executive/xml_loader.hpp"
 #include "cairn/component.hpp"
+#include "cairn/dds.hpp"
 #include "cairn/data_files.hpp"
 #include "cairn/msgs/type_support.hpp"
 #include "cairn_bt_msgs/msg/TreeEvent.hpp"
 #include "cairn_bt_msgs/msg/TreeStatus.hpp"
 #include "cairn_bt_msgs/srv/ExecutiveCommand.hpp"
+#include "cairn_copa_msgs/srv/Retrain.hpp"
+#include "cairn_people_msgs/srv/Follow.hpp"
+#include "cairn_sim_msgs/srv/NavigateTo.hpp"
+#include "cairn_slam_msgs/srv/LoadState.hpp"
+#include "cairn_slam_msgs/srv/Optimize.hpp"
+#include "cairn_slam_msgs/srv/SaveState.hpp"
+#include "cairn/parameter_msgs.hpp"
+#include "composition_interfaces/srv/ListNodes.hpp"
+#include "composition_interfaces/srv/LoadNode.hpp"
+#include "composition_interfaces/srv/UnloadNode.hpp"
+#include "rcl_interfaces/srv/GetParameters.hpp"
 #include "geometry_msgs/msg/PoseStamped.hpp"
 #include "geometry_msgs/msg/Twist.hpp"
 #include "nav_msgs/msg/Odometry.hpp"
@@ -199,6 +213,16 @@ class RuntimeHub final : public bt::Scheduler {
     return p;
   }
 
+  /// One client per (service, type), shared by every node calling it; created at load for literal names so that
+  /// discovery starts early. Null in a dry run.
+  template <class Req, class Resp>
+  std::shared_ptr<cairn::Client<Req, Resp>> client(const std::string& service) {
+    const std::string key = node_.resolve_name(service) + " " + cairn::msgs::type_support<Req>().ros_type_name;
+    auto& c = clients_[key];
+    if (!c) c = node_.create_client<Req, Resp>(service);
+    return std::static_pointer_cast<cairn::Client<Req, Resp>>(c);
+  }
+
   static const std::vector<std::string>& messageTypes() {
     static const std::vector<std::string> types = {"std_msgs/String", "std_msgs/Header", "geometry_msgs/PoseStamped",
                                                    "geometry_msgs/Twist", "nav_msgs/Odometry"};
@@ -295,6 +319,7 @@ class RuntimeHub final : public bt::Scheduler {
   std::map<std::string, std::shared_ptr<cairn::Publisher<std_msgs::msg::String>>> string_pubs_;
   std::map<std::string, TopicState> topics_;
   std::uint64_t next_listener_ = 1;
+  std::map<std::string, std::shared_ptr<void>> clients_;
 };
 
 // ------------------------------------------------------------------------------------------------ runtime actions
@@ -452,6 +477,671 @@ class Wait final : public bt::EventActionNode {
   bt::Scheduler::TimerId timer_ = 0;
 };
 
+// ------------------------------------------------------------------------------------------------ service calls
+/// Base of the actions that call a service: onStart sends the request (once the server is discovered), every later
+/// tick polls the reply future of cairn::Client::async_send — so a reply is noticed at the next tick, at most one
+/// tick period (1 / tick_rate_hz) after it arrived — and `timeout_ms` on the node clock gives FAILURE. A halt or a
+/// timeout abandons the call: the late reply is dropped by the client (the future is never read).
+template <class Req, class Resp>
+class ServiceCallAction : public bt::StatefulActionNode {
+ public:
+  ServiceCallAction(const bt::NodeConfig& c, RuntimeHub& hub)
+      : bt::StatefulActionNode(c), hub_(hub), timeout_(c.input<int>("timeout_ms")) {}
+
+ protected:
+  /// The service to call on this run; an error text gives FAILURE.
+  virtual std::string serviceName(std::string& name) = 0;
+  /// Fills the request from the ports; an error text gives FAILURE.
+  virtual std::string makeRequest(Req& req) = 0;
+  /// SUCCESS or FAILURE from the reply.
+  virtual bt::NodeStatus onReply(const Resp& resp) = 0;
+  /// Called when the call is abandoned (halt or timeout) after the request went out.
+  virtual void onAbandon() {}
+  virtual const char* typeName() const = 0;
+
+  /// Creates the client at load (for a literal service name), so that discovery starts early.
+  void prepare(const bt::Input<std::string>& service) {
+    if (service.isLiteral() && service.get() && !service.get()->empty()) hub_.client<Req, Resp>(*service.get());
+  }
+
+  bt::NodeStatus onStart() override {
+    reply_ = {};
+    sent_ = false;
+    std::string name;
+    if (std::string err = serviceName(name); !err.empty()) return fail(err);
+    client_ = hub_.client<Req, Resp>(name);
+    if (!client_) return fail("no runtime (dry run)");
+    int timeout_ms = 0;
+    timeout_.get(timeout_ms);
+    deadline_ = timeout_ms > 0 ? hub_.now() + std::chrono::milliseconds(timeout_ms) : bt::TimePoint::max();
+    req_ = Req{};
+    if (std::string err = makeRequest(req_); !err.empty()) return fail(err);
+    return onRunning();
+  }
+
+  bt::NodeStatus onRunning() override {
+    if (!sent_ && client_->service_is_ready()) {
+      reply_ = client_->async_send(req_);
+      sent_ = true;
+    }
+    if (sent_ && reply_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+      sent_ = false;
+      try {
+        return onReply(reply_.get());
+      } catch (const std::exception& e) {  // broken promise: the client went away
+        return fail(std::string("no reply: ") + e.what());
+      }
+    }
+    if (hub_.now() >= deadline_) {
+      const bool was_sent = sent_;
+      abandon();
+      return fail((was_sent ? "no reply from " : "no server for ") + client_->name() + " within timeout_ms");
+    }
+    return bt::NodeStatus::RUNNING;
+  }
+
+  void onHalted() override { abandon(); }
+
+  bt::NodeStatus fail(const std::string& what) {
+    reportError(std::string(typeName()) + ": " + what);
+    return bt::NodeStatus::FAILURE;
+  }
+  const std::shared_ptr<cairn::Client<Req, Resp>>& client() const { return client_; }
+
+  RuntimeHub& hub_;
+
+ private:
+  void abandon() {
+    if (sent_) onAbandon();
+    reply_ = {};
+    sent_ = false;
+  }
+  bt::Input<int> timeout_;
+  std::shared_ptr<cairn::Client<Req, Resp>> client_;
+  Req req_{};
+  std::future<Resp> reply_;
+  bool sent_ = false;
+  bt::TimePoint deadline_{0};
+};
+
+/// Reads the `service` port (CallService, NavigateTo).
+inline std::string servicePort(const bt::Input<std::string>& in, std::string& name) {
+  return in.get(name) && !name.empty() ? "" : "port 'service' is not set";
+}
+
+/// What CallService knows about one service type: how the `request` text fills a request, whether a reply means
+/// success. The request text is small and per type (no message reflection exists): documented in `help`.
+template <class Req, class Resp>
+struct ServiceAdapter {
+  std::string help;
+  std::function<std::string(const std::string& text, Req& req)> fill;  ///< error text or ""
+  std::function<bool(const Resp&)> ok;
+};
+
+bool parseBoolText(const std::string& text, bool& out) {
+  if (text.empty() || text == "false" || text == "0") out = false;
+  else if (text == "true" || text == "1") out = true;
+  else return false;
+  return true;
+}
+
+std::vector<std::string> splitWords(const std::string& text) {
+  std::istringstream in(text);
+  std::vector<std::string> w;
+  for (std::string s; in >> s;) w.push_back(s);
+  return w;
+}
+
+/// CallService: calls `service` of the registered type `type` with the request built from `request`; SUCCESS if
+/// the reply reports success, the reply as text in `response`.
+template <class Req, class Resp>
+class CallService final : public ServiceCallAction<Req, Resp> {
+  using Base = ServiceCallAction<Req, Resp>;
+
+ public:
+  CallService(const bt::NodeConfig& c, RuntimeHub& hub, ServiceAdapter<Req, Resp> adapter)
+      : Base(c, hub), adapter_(std::move(adapter)), service_(c.input<std::string>("service")),
+        request_(c.input<std::string>("request")), response_(c.output<std::string>("response")) {
+    this->prepare(service_);
+    std::string text;
+    Req probe{};
+    if (request_.isLiteral() && request_.get(text))
+      if (std::string err = adapter_.fill(text, probe); !err.empty()) throw bt::PortError("port 'request': " + err);
+  }
+
+ protected:
+  const char* typeName() const override { return "CallService"; }
+  std::string serviceName(std::string& name) override { return servicePort(service_, name); }
+  std::string makeRequest(Req& req) override {
+    std::string text;
+    request_.get(text);
+    const std::string err = adapter_.fill(text, req);
+    return err.empty() ? err : "request '" + text + "': " + err;
+  }
+  bt::NodeStatus onReply(const Resp& resp) override {
+    response_.set(cairn::msgs::to_text(resp));
+    return adapter_.ok(resp) ? bt::NodeStatus::SUCCESS : bt::NodeStatus::FAILURE;
+  }
+
+ private:
+  ServiceAdapter<Req, Resp> adapter_;
+  bt::Input<std::string> service_, request_;
+  bt::Output<std::string> response_;
+};
+
+/// The service types CallService can call: type name -> node constructor (with the type's request syntax).
+struct ServiceTypeEntry {
+  std::string help;
+  std::function<std::unique_ptr<bt::TreeNode>(const bt::NodeConfig&, RuntimeHub&)> make;
+};
+
+template <class Req, class Resp>
+ServiceTypeEntry serviceType(ServiceAdapter<Req, Resp> a) {
+  const std::string help = a.help;
+  return {help, [a](const bt::NodeConfig& c, RuntimeHub& hub) -> std::unique_ptr<bt::TreeNode> {
+            return std::make_unique<CallService<Req, Resp>>(c, hub, a);
+          }};
+}
+
+const std::map<std::string, ServiceTypeEntry>& serviceTypes() {
+  namespace slam = cairn_slam_msgs::srv;
+  namespace comp = composition_interfaces::srv;
+  namespace bs = cairn_bt_msgs::srv;
+  static const std::map<std::string, ServiceTypeEntry> types = {
+      {"cairn_slam_msgs/srv/Optimize",
+       serviceType<slam::Optimize_Request, slam::Optimize_Response>(
+           {"republish_map: true | false (default)",
+            [](const std::string& t, slam::Optimize_Request& r) {
+              return parseBoolText(t, r.republish_map) ? "" : "expected true or false";
+            },
+            [](const slam::Optimize_Response& r) { return r.success; }})},
+      {"cairn_slam_msgs/srv/SaveState",
+       serviceType<slam::SaveState_Request, slam::SaveState_Response>(
+           {"<path> [<map_stem>]",
+            [](const std::string& t, slam::SaveState_Request& r) -> std::string {
+              const auto w = splitWords(t);
+              if (w.empty() || w.size() > 2) return "expected '<path> [<map_stem>]'";
+              r.path = w[0];
+              r.map_stem = w.size() > 1 ? w[1] : "";
+              return "";
+            },
+            [](const slam::SaveState_Response& r) { return r.success; }})},
+      {"cairn_slam_msgs/srv/LoadState",
+       serviceType<slam::LoadState_Request, slam::LoadState_Response>(
+           {"<path> [localization_only]",
+            [](const std::string& t, slam::LoadState_Request& r) -> std::string {
+              const auto w = splitWords(t);
+              if (w.empty() || w.size() > 2 || (w.size() == 2 && w[1] != "localization_only"))
+                return "expected '<path> [localization_only]'";
+              r.path = w[0];
+              r.localization_only = w.size() == 2;
+              return "";
+            },
+            [](const slam::LoadState_Response& r) { return r.success; }})},
+      {"cairn_copa_msgs/srv/Retrain",
+       serviceType<cairn_copa_msgs::srv::Retrain_Request, cairn_copa_msgs::srv::Retrain_Response>(
+           {"flush: true | false (default)",
+            [](const std::string& t, cairn_copa_msgs::srv::Retrain_Request& r) {
+              return parseBoolText(t, r.flush) ? "" : "expected true or false";
+            },
+            [](const cairn_copa_msgs::srv::Retrain_Response& r) { return r.accepted; }})},
+      {"cairn_people_msgs/srv/Follow",
+       serviceType<cairn_people_msgs::srv::Follow_Request, cairn_people_msgs::srv::Follow_Response>(
+           {"closest | release | <track id>",
+            [](const std::string& t, cairn_people_msgs::srv::Follow_Request& r) -> std::string {
+              namespace F = cairn_people_msgs::srv::Follow_Request_Constants;
+              if (t == "closest") r.command = F::CLOSEST_IN_FRONT;
+              else if (t == "release") r.command = F::RELEASE;
+              else {
+                char* end = nullptr;
+                const unsigned long id = std::strtoul(t.c_str(), &end, 10);
+                if (t.empty() || *end != '\0' || id > 0xffffffffUL) return "expected closest, release or a track id";
+                r.command = F::TRACK_ID;
+                r.track_id = static_cast<uint32_t>(id);
+              }
+              return "";
+            },
+            [](const cairn_people_msgs::srv::Follow_Response& r) { return r.success; }})},
+      {"composition_interfaces/srv/ListNodes",
+       serviceType<comp::ListNodes_Request, comp::ListNodes_Response>(
+           {"(none)",
+            [](const std::string& t, comp::ListNodes_Request&) -> std::string {
+              return t.empty() ? "" : "takes no request";
+            },
+            [](const comp::ListNodes_Response&) { return true; }})},
+      {"cairn_bt_msgs/srv/ExecutiveCommand",
+       serviceType<bs::ExecutiveCommand_Request, bs::ExecutiveCommand_Response>(
+           {"start | stop | switch <tree_id> | load <file> [<tree_id>]",
+            [](const std::string& t, bs::ExecutiveCommand_Request& r) -> std::string {
+              namespace C = bs::ExecutiveCommand_Request_Constants;
+              const auto w = splitWords(t);
+              if (w.size() == 1 && w[0] == "start") r.command = C::START;
+              else if (w.size() == 1 && w[0] == "stop") r.command = C::STOP;
+              else if (w.size() == 2 && w[0] == "switch") r.command = C::SWITCH_TREE, r.tree_id = w[1];
+              else if ((w.size() == 2 || w.size() == 3) && w[0] == "load")
+                r.command = C::LOAD, r.file = w[1], r.tree_id = w.size() == 3 ? w[2] : "";
+              else return "expected start, stop, switch <tree_id> or load <file> [<tree_id>]";
+              return "";
+            },
+            [](const bs::ExecutiveCommand_Response& r) { return r.success; }})},
+  };
+  return types;
+}
+
+std::string serviceTypeList() {
+  std::string known;
+  for (const auto& [name, e] : serviceTypes()) known += (known.empty() ? "" : ", ") + name;
+  return known;
+}
+
+std::unique_ptr<bt::TreeNode> makeCallService(const bt::NodeConfig& c, RuntimeHub& hub) {
+  std::string type;
+  auto in = c.input<std::string>("type");
+  if (!in.isLiteral() || !in.get(type)) throw bt::PortError("port 'type' must be a literal service type");
+  auto it = serviceTypes().find(type);
+  if (it == serviceTypes().end())
+    throw bt::PortError("port 'type': unsupported service type '" + type + "' (supported: " + serviceTypeList() + ")");
+  return it->second.make(c, hub);
+}
+
+bt::PortList callServicePorts() {
+  std::string requests;
+  for (const auto& [name, e] : serviceTypes()) requests += (requests.empty() ? "" : "; ") + name + ": " + e.help;
+  return {bt::InputPort<std::string>("service", "service name (relative names resolve in the node's namespace)"),
+          bt::InputPort<std::string>("type", "service type (literal): " + serviceTypeList()),
+          bt::InputPortWithDefault<std::string>("request", "", "request text, per type: " + requests),
+          bt::InputPortWithDefault<int>("timeout_ms", "5000", "FAILURE after this long on the node clock (0: never)"),
+          bt::OutputPort<std::string>("response", "the reply as text (cairn topic echo rendering)")};
+}
+
+/// CheckParameter: reads parameter `param` of node `node` through its rcl_interfaces get_parameters service.
+/// SUCCESS if it is set and, with `equals` given, equal to it (numbers compare numerically, so 2 equals 2.0).
+class CheckParameter final
+    : public ServiceCallAction<rcl_interfaces::srv::GetParameters_Request, rcl_interfaces::srv::GetParameters_Response> {
+ public:
+  CheckParameter(const bt::NodeConfig& c, RuntimeHub& hub)
+      : ServiceCallAction(c, hub), node_(c.input<std::string>("node")), param_(c.input<std::string>("param")),
+        equals_(c.input<std::string>("equals")), value_(c.output<std::string>("value")) {}
+  static bt::PortList providedPorts() {
+    return {bt::InputPort<std::string>("node", "fully qualified node name, e.g. /talker"),
+            bt::InputPort<std::string>("param", "parameter name"),
+            bt::InputPortWithDefault<std::string>("equals", "", "expected value as YAML text (empty: only that it is set)"),
+            bt::InputPortWithDefault<int>("timeout_ms", "2000", "FAILURE after this long on the node clock (0: never)"),
+            bt::OutputPort<std::string>("value", "the value as YAML text (cairn param get)")};
+  }
+
+ protected:
+  const char* typeName() const override { return "CheckParameter"; }
+  std::string serviceName(std::string& name) override {
+    std::string node;
+    if (!node_.get(node) || node.empty()) return "port 'node' is not set";
+    name = node + "/get_parameters";
+    return "";
+  }
+  std::string makeRequest(rcl_interfaces::srv::GetParameters_Request& req) override {
+    std::string name;
+    if (!param_.get(name) || name.empty()) return "port 'param' is not set";
+    req.names = {name};
+    return "";
+  }
+  bt::NodeStatus onReply(const rcl_interfaces::srv::GetParameters_Response& resp) override {
+    if (resp.values.empty()) return fail("empty reply");
+    const cairn::ParameterValue v = cairn::from_parameter_msg(resp.values[0]);
+    if (std::holds_alternative<std::monostate>(v)) return bt::NodeStatus::FAILURE;  // not declared
+    value_.set(cairn::to_string(v));
+    std::string equals;
+    equals_.get(equals);
+    if (equals.empty()) return bt::NodeStatus::SUCCESS;
+    const cairn::ParameterValue want = cairn::parse_parameter_text(equals);
+    auto number = [](const cairn::ParameterValue& p) -> std::optional<double> {
+      if (auto* i = std::get_if<int64_t>(&p)) return static_cast<double>(*i);
+      if (auto* d = std::get_if<double>(&p)) return *d;
+      return std::nullopt;
+    };
+    const auto a = number(v), b = number(want);
+    const bool same = (a && b) ? *a == *b : cairn::to_string(v) == cairn::to_string(want);
+    return same ? bt::NodeStatus::SUCCESS : bt::NodeStatus::FAILURE;
+  }
+
+ private:
+  bt::Input<std::string> node_, param_, equals_;
+  bt::Output<std::string> value_;
+};
+
+/// NavigateTo: drives to a named location or a pose through the NavigateTo service (cairn_sim_msgs/srv/NavigateTo,
+/// served by the simulator's scripted driving until a navigation component exists). A halt or a timeout cancels
+/// the goal on the server. Results feed the navigation monitor.
+class NavigateTo final
+    : public ServiceCallAction<cairn_sim_msgs::srv::NavigateTo_Request, cairn_sim_msgs::srv::NavigateTo_Response> {
+ public:
+  using Req = cairn_sim_msgs::srv::NavigateTo_Request;
+  using Resp = cairn_sim_msgs::srv::NavigateTo_Response;
+  NavigateTo(const bt::NodeConfig& c, RuntimeHub& hub, std::function<void(bool)> on_result)
+      : ServiceCallAction(c, hub), on_result_(std::move(on_result)), service_(c.input<std::string>("service")),
+        location_(c.input<std::string>("location")), x_(c.input<double>("x")), y_(c.input<double>("y")),
+        timeout_ms_(c.input<int>("timeout_ms")), message_(c.output<std::string>("message")) {
+    prepare(service_);
+  }
+  static bt::PortList providedPorts() {
+    return {bt::InputPortWithDefault<std::string>("service", "sim/navigate_to", "NavigateTo service"),
+            bt::InputPortWithDefault<std::string>("location", "", "named location (world region or route end); empty: x, y"),
+            bt::InputPortWithDefault<double>("x", "0", "m, goal in the map frame when location is empty"),
+            bt::InputPortWithDefault<double>("y", "0", "m"),
+            bt::InputPortWithDefault<int>("timeout_ms", "0", "FAILURE (and the goal cancelled) after this long (0: never)"),
+            bt::OutputPort<std::string>("message", "the server's message (arrived, timed out, ...)")};
+  }
+
+ protected:
+  const char* typeName() const override { return "NavigateTo"; }
+  std::string serviceName(std::string& name) override { return servicePort(service_, name); }
+  std::string makeRequest(Req& req) override {
+    location_.get(req.location);
+    if (req.location.empty() && (!x_.get(req.x) || !y_.get(req.y))) return "ports 'x' and 'y' are not set";
+    int timeout_ms = 0;
+    timeout_ms_.get(timeout_ms);
+    req.timeout_s = std::max(0, timeout_ms) / 1000.0;  // the server gives up too (it counts on its own clock)
+    return "";
+  }
+  bt::NodeStatus onReply(const Resp& resp) override {
+    message_.set(resp.message);
+    if (on_result_) on_result_(resp.success);
+    if (!resp.success) reportError("NavigateTo: " + resp.message);
+    return resp.success ? bt::NodeStatus::SUCCESS : bt::NodeStatus::FAILURE;
+  }
+  void onAbandon() override {
+    Req cancel;
+    cancel.cancel = true;
+    (void)client()->async_send(cancel);  // fire and forget: the server stops the robot
+  }
+
+ private:
+  std::function<void(bool)> on_result_;
+  bt::Input<std::string> service_, location_;
+  bt::Input<double> x_, y_;
+  bt::Input<int> timeout_ms_;
+  bt::Output<std::string> message_;
+};
+
+// ------------------------------------------------------------------------------------------------ monitoring
+/// Monitoring and recovery against the running system (Stüde §5.3, Table 5.1): topic rates from DDS readers of any
+/// registered message type, component liveness from the containers' list_nodes, restarts through their
+/// unload_node/load_node services, open-loop recovery motions on cmd_vel, alerts on a topic and the supervisor's
+/// all-clear from another. No threads: replies are futures advanced by one executor timer (`monitor.poll_ms`).
+class DdsSystem final : public bt::monitoring::RecoveryInterface {
+ public:
+  using ListReq = composition_interfaces::srv::ListNodes_Request;
+  using ListResp = composition_interfaces::srv::ListNodes_Response;
+  using LoadReq = composition_interfaces::srv::LoadNode_Request;
+  using LoadResp = composition_interfaces::srv::LoadNode_Response;
+  using UnloadReq = composition_interfaces::srv::UnloadNode_Request;
+  using UnloadResp = composition_interfaces::srv::UnloadNode_Response;
+
+  /// A component the executive watches and may restart: "<fqn> <class> <container>".
+  struct ComponentSpec {
+    std::string fqn, class_name, container;
+    bt::monitoring::AgeMonitor* liveness = nullptr;
+  };
+
+  DdsSystem(cairn::Node& node, RuntimeHub& hub) : node_(node), hub_(hub) {}
+  ~DdsSystem() override { readers_.clear(); }
+
+  bt::monitoring::MonitorSet& monitors() { return monitors_; }
+
+  /// Parses the monitor.* parameters; throws std::invalid_argument naming the parameter and entry.
+  void configure(const std::vector<std::string>& topics, const std::vector<std::string>& components,
+                 bt::Duration liveness_warn, bt::Duration liveness_error, const std::string& alert_topic,
+                 const std::string& clear_topic, const std::string& cmd_vel_topic) {
+    namespace m = bt::monitoring;
+    for (std::size_t i = 0; i < components.size(); ++i) {
+      const auto w = splitWords(components[i]);
+      const std::string where = "monitor.components[" + std::to_string(i) + "]";
+      if (w.size() != 3 || w[0].empty() || w[0][0] != '/')
+        throw std::invalid_argument(where + ": expected '<node fqn> <class> <container>', got '" + components[i] + "'");
+      ComponentSpec c{w[0], w[1], w[2]};
+      c.liveness = &monitors_.emplace<m::AgeMonitor>({}, "alive:" + c.fqn, "component", c.fqn, liveness_warn, liveness_error);
+      components_.push_back(c);
+      listClient(c.container);
+    }
+    for (std::size_t i = 0; i < topics.size(); ++i) {
+      const auto w = splitWords(topics[i]);
+      const std::string where = "monitor.topics[" + std::to_string(i) + "]";
+      char* end = nullptr;
+      const double hz = w.size() == 4 ? std::strtod(w[2].c_str(), &end) : 0.0;
+      if (w.size() != 4 || end == nullptr || *end != '\0' || !(hz > 0.0))
+        throw std::invalid_argument(where + ": expected '<topic> <type> <expected_hz> <component>', got '" + topics[i] + "'");
+      std::string type = w[1];
+      if (type.find("/msg/") == std::string::npos && type.find('/') != std::string::npos)
+        type.insert(type.find('/'), "/msg");  // std_msgs/String -> std_msgs/msg/String
+      const cairn::msgs::TypeSupport* ts = cairn::msgs::find_type_support(type);
+      if (ts == nullptr) throw std::invalid_argument(where + ": unknown message type '" + w[1] + "'");
+      auto& mon = monitors_.emplace<m::TopicRateMonitor>({}, node_.resolve_name(w[0]), w[3], hz);
+      rates_.push_back(&mon);
+      if (node_.dry_run()) continue;
+      // Any QoS offered matches a best-effort, volatile reader: the monitor only counts arrivals.
+      cairn::QoS q;
+      q.best_effort();
+      auto* monp = &mon;
+      auto reader = std::make_shared<std::unique_ptr<cairn::DdsReader>>();
+      auto sample = std::shared_ptr<void>(ts->create(), ts->destroy);
+      *reader = std::make_unique<cairn::DdsReader>(
+          node_.context(), cairn::dds_topic_name(node_.resolve_name(w[0])), *ts, q,
+          cairn::DdsEndpointOptions{node_.fully_qualified_name(), false},
+          [this, monp, sample, mu = std::make_shared<std::mutex>()](cairn::DdsReader& r) {
+            std::lock_guard l(*mu);
+            cairn::MessageInfo info;
+            while (r.take(sample.get(), info)) monp->onMessage(bt::TimePoint{node_.now().ns});
+          });
+      readers_.push_back(std::move(*reader));
+    }
+    alert_topic_ = alert_topic;
+    cmd_vel_topic_ = cmd_vel_topic;
+    clear_topic_ = clear_topic;
+    if (!alert_topic.empty()) hub_.stringPublisher(alert_topic);
+    if (!clear_topic.empty()) hub_.ensureSubscription(clear_topic, "std_msgs/String");
+    const bt::TimePoint now{node_.now().ns};
+    for (auto& c : components_) c.liveness->heartbeat(now);  // a grace period of liveness_error from the start
+    for (auto* r : rates_) r->reset(now);                     // and a full rate window
+  }
+
+  bool empty() const { return components_.empty() && rates_.empty(); }
+
+  /// Called by the poll timer in the node's callback group: advances restarts, handles list replies and sends the
+  /// next list requests.
+  void poll(bool send_lists) {
+    const bt::TimePoint now{node_.now().ns};
+    for (auto& [container, l] : lists_) {
+      if (l.pending.valid() && l.pending.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+        ListResp resp;
+        try {
+          resp = l.pending.get();
+        } catch (const std::exception&) {
+          continue;
+        }
+        for (auto& c : components_)
+          if (c.container == container &&
+              std::find(resp.full_node_names.begin(), resp.full_node_names.end(), c.fqn) != resp.full_node_names.end())
+            c.liveness->heartbeat(now);
+      }
+      if (send_lists && !l.pending.valid() && l.client && l.client->service_is_ready())
+        l.pending = l.client->async_send(ListReq{});
+    }
+    for (auto it = restarts_.begin(); it != restarts_.end();) it = advance(*it, now) ? restarts_.erase(it) : std::next(it);
+  }
+
+  // ---- RecoveryInterface
+  void restartComponent(const std::string& component, Done done) override {
+    auto it = std::find_if(components_.begin(), components_.end(), [&](const ComponentSpec& c) { return c.fqn == component; });
+    if (it == components_.end()) {
+      CAIRN_ERROR(node_.logger(), "RestartComponent: '" << component << "' is not in monitor.components");
+      done(false);
+      return;
+    }
+    CAIRN_WARN(node_.logger(), "restarting " << it->fqn << " (" << it->class_name << ") in container " << it->container);
+    Restart r;
+    r.spec = *it;
+    r.done = std::move(done);
+    r.deadline = bt::TimePoint{node_.now().ns} + std::chrono::seconds(15);
+    restarts_.push_back(std::move(r));
+  }
+  void moveBackwards(double distance_m, Done done) override {
+    drive(-kRecoverySpeed, 0.0, std::abs(distance_m) / kRecoverySpeed, std::move(done));  // Table 5.1 step 2
+  }
+  void slowRotate(double angle_rad, Done done) override {
+    drive(0.0, kRecoveryTurn, std::abs(angle_rad) / kRecoveryTurn, std::move(done));  // Table 5.1 localization
+  }
+  void askSupervisor(const std::string& message, Done done) override {
+    sendAlert("supervisor needed: " + message);
+    if (clear_topic_.empty()) {
+      done(false);
+      return;
+    }
+    clear_listener_ = hub_.listen(clear_topic_, [this, done = std::move(done)](const std::string&) {
+      hub_.unlisten(clear_topic_, clear_listener_);
+      clear_listener_ = 0;
+      done(true);
+    });
+  }
+  void sendAlert(const std::string& message) override {
+    CAIRN_WARN(node_.logger(), "alert: " << message);
+    if (alert_topic_.empty()) return;
+    std_msgs::msg::String m;
+    m.data = message;
+    hub_.stringPublisher(alert_topic_)->publish(m);
+  }
+  void cancel() override {
+    restarts_.clear();
+    if (clear_listener_ != 0) hub_.unlisten(clear_topic_, clear_listener_);
+    clear_listener_ = 0;
+    if (drive_timer_ != 0) hub_.cancelTimer(drive_timer_);
+    if (drive_timer_ != 0) publishTwist(0.0, 0.0);
+    drive_timer_ = 0;
+  }
+
+ private:
+  static constexpr double kRecoverySpeed = 0.1;  // m/s, backwards (chosen; Table 5.1 gives no speed)
+  static constexpr double kRecoveryTurn = 0.3;   // rad/s, "slow rotate" (chosen)
+
+  struct ListState {
+    std::shared_ptr<cairn::Client<ListReq, ListResp>> client;
+    std::future<ListResp> pending;
+  };
+  struct Restart {
+    ComponentSpec spec;
+    Done done;
+    int stage = 0;  // 0 send list, 1 list sent, 2 unload sent, 3 load sent
+    std::future<ListResp> list;
+    std::future<UnloadResp> unload;
+    std::future<LoadResp> load;
+    bt::TimePoint deadline{0};
+  };
+
+  ListState& listClient(const std::string& container) {
+    auto& l = lists_[container];
+    if (!l.client) l.client = hub_.client<ListReq, ListResp>("/" + container + "/_container/list_nodes");
+    return l;
+  }
+
+  template <class F>
+  static bool ready(F& f) {
+    return f.valid() && f.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
+  }
+
+  /// One step of a restart (list -> unload if present -> load); true when finished (done called).
+  bool advance(Restart& r, bt::TimePoint now) {
+    const std::string base = "/" + r.spec.container + "/_container/";
+    auto finish = [&](bool ok, const std::string& why) {
+      if (!ok) CAIRN_ERROR(node_.logger(), "restart of " << r.spec.fqn << " failed: " << why);
+      // on success RestartComponent resets the target's monitors (a fresh history for the new instance)
+      auto done = std::move(r.done);
+      done(ok);
+      return true;
+    };
+    if (now > r.deadline) return finish(false, "no answer from container " + r.spec.container);
+    try {
+      if (r.stage == 0) {
+        auto c = hub_.client<ListReq, ListResp>(base + "list_nodes");
+        if (c->service_is_ready()) r.list = c->async_send(ListReq{}), r.stage = 1;
+      } else if (r.stage == 1 && ready(r.list)) {
+        const ListResp l = r.list.get();
+        auto it = std::find(l.full_node_names.begin(), l.full_node_names.end(), r.spec.fqn);
+        if (it != l.full_node_names.end()) {
+          UnloadReq u;
+          u.unique_id = l.unique_ids.at(static_cast<std::size_t>(it - l.full_node_names.begin()));
+          r.unload = hub_.client<UnloadReq, UnloadResp>(base + "unload_node")->async_send(u);
+          r.stage = 2;
+        } else {
+          r.load = hub_.client<LoadReq, LoadResp>(base + "load_node")->async_send(loadRequest(r.spec));
+          r.stage = 3;
+        }
+      } else if (r.stage == 2 && ready(r.unload)) {
+        const UnloadResp u = r.unload.get();
+        if (!u.success) return finish(false, "unload: " + u.error_message);
+        r.load = hub_.client<LoadReq, LoadResp>(base + "load_node")->async_send(loadRequest(r.spec));
+        r.stage = 3;
+      } else if (r.stage == 3 && ready(r.load)) {
+        const LoadResp l = r.load.get();
+        return l.success ? finish(true, "") : finish(false, "load: " + l.error_message);
+      }
+    } catch (const std::exception& e) {
+      return finish(false, e.what());
+    }
+    return false;
+  }
+
+  /// The component with its class and name; parameters and remaps of the original load are not known here (the
+  /// component comes back with its defaults — README "Monitoring over DDS").
+  static LoadReq loadRequest(const ComponentSpec& s) {
+    LoadReq r;
+    r.plugin_name = s.class_name;
+    const auto slash = s.fqn.rfind('/');
+    r.node_name = s.fqn.substr(slash + 1);
+    r.node_namespace = slash == 0 ? "/" : s.fqn.substr(0, slash);
+    return r;
+  }
+
+  void publishTwist(double v, double w) {
+    if (!twist_pub_) twist_pub_ = node_.create_publisher<geometry_msgs::msg::Twist>(cmd_vel_topic_, cairn::QoS{});
+    if (!twist_pub_) return;
+    geometry_msgs::msg::Twist t;
+    t.linear.x = v;
+    t.angular.z = w;
+    twist_pub_->publish(t);
+  }
+
+  /// Open loop: (v, w) on cmd_vel at 10 Hz for `seconds` of node time, then zero and done(true).
+  void drive(double v, double w, double seconds, Done done) {
+    const bt::TimePoint end = bt::TimePoint{node_.now().ns} + std::chrono::nanoseconds(static_cast<std::int64_t>(seconds * 1e9));
+    auto step = std::make_shared<std::function<void()>>();
+    *step = [this, v, w, end, done = std::move(done), step_weak = std::weak_ptr(step)]() {
+      const bt::TimePoint now{node_.now().ns};
+      if (now >= end) {
+        publishTwist(0.0, 0.0);
+        drive_timer_ = 0;
+        done(true);
+        return;
+      }
+      publishTwist(v, w);
+      if (auto s = step_weak.lock()) drive_timer_ = hub_.callAt(std::min(end, now + std::chrono::milliseconds(100)), [s] { (*s)(); });
+    };
+    drive_step_ = step;
+    (*step)();
+  }
+
+  cairn::Node& node_;
+  RuntimeHub& hub_;
+  bt::monitoring::MonitorSet monitors_;
+  std::vector<ComponentSpec> components_;
+  std::map<std::string, ListState> lists_;
+  std::vector<std::unique_ptr<cairn::DdsReader>> readers_;
+  std::vector<bt::monitoring::TopicRateMonitor*> rates_;
+  std::vector<Restart> restarts_;
+  std::string alert_topic_, clear_topic_, cmd_vel_topic_;
+  std::uint64_t clear_listener_ = 0;
+  bt::Scheduler::TimerId drive_timer_ = 0;
+  std::shared_ptr<std::function<void()>> drive_step_;
+  std::shared_ptr<cairn::Publisher<geometry_msgs::msg::Twist>> twist_pub_;
+};
+
 template <class T>
 void registerRuntimeNode(bt::NodeFactory& f, const std::string& id, const std::string& description, RuntimeHub& hub) {
   bt::NodeManifest m;
@@ -470,6 +1160,7 @@ class ExecutiveNode : public cairn::Node {
       : cairn::Node(o),
         gate_(std::make_shared<Gate>()),
         hub_(*this, gate_, [this] { tick(); }),
+        system_(*this, hub_),
         executive_(factory_, hub_) {
     // Timers and subscriptions created below may fire on executor threads before construction is over.
     const auto hold = gate_->hold();
@@ -488,6 +1179,50 @@ class ExecutiveNode : public cairn::Node {
     registerRuntimeNode<WaitForMessage>(factory_, "WaitForMessage",
                                         "waits for a message on `topic` (optionally equal to `equals`), with timeout", hub_);
     registerRuntimeNode<Wait>(factory_, "Wait", "waits `msec` on the node clock (executor one-shot timer)", hub_);
+    registerRuntimeNode<CheckParameter>(factory_, "CheckParameter",
+                                        "SUCCESS if parameter `param` of node `node` is set (and equals `equals`)", hub_);
+    {
+      bt::NodeManifest m;
+      m.id = "CallService";
+      m.description = "calls `service` of a registered type with the `request` text; SUCCESS if the reply says so";
+      m.kind = bt::NodeKind::Action;
+      m.ports = callServicePorts();
+      m.create = [this](const bt::NodeConfig& c) { return makeCallService(c, hub_); };
+      factory_.registerManifest(std::move(m));
+    }
+
+    // Monitoring and recovery (Stüde §5.3): the monitoring nodes of trees/monitoring.xml on the running system.
+    const auto mon_topics = declare_parameter<std::vector<std::string>>(
+        "monitor.topics", {}, D{"topic rate monitors: '<topic> <type> <expected_hz> <component>'", {}, {}, true});
+    const auto mon_components = declare_parameter<std::vector<std::string>>(
+        "monitor.components", {}, D{"liveness (container list) and restart: '<node fqn> <class> <container>'", {}, {}, true});
+    const int poll_ms = declare_parameter<int>("monitor.poll_ms", 200, D{"container list period and restart steps", 10, 60000, true});
+    const int live_warn = declare_parameter<int>("monitor.liveness_warn_ms", 1000, D{"not listed for this long: warning", 1, 3600000, true});
+    const int live_err = declare_parameter<int>("monitor.liveness_error_ms", 2000, D{"not listed for this long: error", 1, 3600000, true});
+    const int nav_failures = declare_parameter<int>(
+        "monitor.navigation_failures", 0, D{"NavigateTo failures in a row that are a navigation error (0: no monitor)", 0, 1000, true});
+    const std::string alert_topic = declare_parameter<std::string>("monitor.alert_topic", "bt/alerts", D{"alerts (std_msgs/String)", {}, {}, true});
+    const std::string clear_topic = declare_parameter<std::string>(
+        "monitor.clear_topic", "bt/all_clear", D{"a message here is the supervisor's all-clear for AskSupervisor", {}, {}, true});
+    const std::string cmd_vel = declare_parameter<std::string>("monitor.cmd_vel_topic", "cmd_vel", D{"MoveBackwards / SlowRotate (open loop)", {}, {}, true});
+    system_.configure(mon_topics, mon_components, std::chrono::milliseconds(live_warn), std::chrono::milliseconds(live_err),
+                      alert_topic, clear_topic, cmd_vel);
+    if (nav_failures > 0)
+      nav_monitor_ = &system_.monitors().emplace<bt::monitoring::NavigationMonitor>({}, "navigation", nav_failures, nav_failures);
+    bt::monitoring::registerMonitoringNodes(factory_, system_.monitors(), system_);
+    {
+      bt::NodeManifest m;
+      m.id = "NavigateTo";
+      m.description = "drives to a named location or a pose (NavigateTo service; the simulator serves it)";
+      m.kind = bt::NodeKind::Action;
+      m.ports = NavigateTo::providedPorts();
+      m.create = [this](const bt::NodeConfig& c) {
+        return std::make_unique<NavigateTo>(c, hub_, [this](bool ok) {
+          if (nav_monitor_) nav_monitor_->onResult(ok);
+        });
+      };
+      factory_.registerManifest(std::move(m));
+    }
 
     status_pub_ = create_publisher<bmsg::TreeStatus>("bt/status", cairn::QoS::latched());
     // transient local: a late watcher (or one still in discovery) gets the last 1000 transitions
@@ -508,6 +1243,8 @@ class ExecutiveNode : public cairn::Node {
         });
     tick_timer_ = create_timer(
         std::chrono::nanoseconds(static_cast<std::int64_t>(1e9 / rate)), [this] { gate_->run([this] { tick(); }); });
+    if (!system_.empty())
+      poll_timer_ = create_timer(std::chrono::milliseconds(poll_ms), [this] { gate_->run([this] { system_.poll(true); }); });
     if (dry_run()) return;
     if (autostart && executive_.tree()) {
       executive_.start();
@@ -620,12 +1357,14 @@ class ExecutiveNode : public cairn::Node {
   std::shared_ptr<Gate> gate_;
   bt::NodeFactory factory_;
   RuntimeHub hub_;          // the scheduler: must outlive the executive's tree
+  DdsSystem system_;        // monitors and recovery: must outlive the tree too
+  bt::monitoring::NavigationMonitor* nav_monitor_ = nullptr;
   bt::Executive executive_;  // destroyed first: halting the tree cancels its timers and listeners
   std::vector<bmsg::TreeEvent> pending_events_;
   std::shared_ptr<cairn::Publisher<bmsg::TreeStatus>> status_pub_;
   std::shared_ptr<cairn::Publisher<bmsg::TreeEvent>> event_pub_;
   std::shared_ptr<cairn::Service<bsrv::ExecutiveCommand_Request, bsrv::ExecutiveCommand_Response>> command_srv_;
-  std::shared_ptr<cairn::TimerBase> tick_timer_;
+  std::shared_ptr<cairn::TimerBase> tick_timer_, poll_timer_;
 };
 
 }  // namespace cairn_bt

@@ -13,6 +13,9 @@
 
 #include "cairn/bt_executive/executive.hpp"
 #include "cairn/container.hpp"
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 #include "cairn/launch.hpp"
 #include "cairn_bt_msgs/msg/TreeEvent.hpp"
 #include "cairn_bt_msgs/msg/TreeStatus.hpp"
@@ -111,8 +114,16 @@ struct Container {
   std::shared_ptr<cairn::Context> ctx = cairn::Context::create();
   cairn::Executor exec{cairn::Executor::Options{2}};
   cairn::ComponentLoader loader;
-  cairn::ComponentManager mgr{ctx, exec, "bt_container", loader};
+  cairn::ComponentManager mgr;
   std::thread spinner;
+
+  explicit Container(const std::string& name = "bt_container") : mgr(ctx, exec, name, loader) {}
+
+  cairn::LoadResult load(const cairn::LoadRequest& req) {
+    auto r = mgr.load(req);
+    if (!spinner.joinable()) spinner = std::thread([this] { exec.spin(); });
+    return r;
+  }
 
   cairn::LoadResult load(const std::string& tree_file, bool autostart, bool use_sim_time = false) {
     cairn::LoadRequest req{"cairn_bt::ExecutiveNode", "executive"};
@@ -120,9 +131,7 @@ struct Container {
     req.parameters["use_sim_time"] = use_sim_time;
     req.parameters["tick_rate_hz"] = 20.0;
     req.parameters["autostart"] = autostart;
-    auto r = mgr.load(req);
-    spinner = std::thread([this] { exec.spin(); });
-    return r;
+    return load(req);
   }
   ~Container() {
     exec.cancel();
@@ -300,6 +309,143 @@ TEST(BtComponent, TimersRunOnSimTime) {
   EXPECT_EQ(done->stamp.sec, 700) << "the Wait completed at the sim time that passed its deadline";
 }
 
+// ------------------------------------------------------------------------------------------------ runtime nodes
+namespace {
+/// Collects the std_msgs/String messages of one topic.
+struct Texts {
+  std::mutex mu;
+  std::vector<std::string> v;
+  std::shared_ptr<cairn::Subscription<std_msgs::msg::String>> sub;
+  Texts(cairn::Node& n, const std::string& topic) {
+    sub = n.create_subscription<std_msgs::msg::String>(topic, cairn::QoS{}, [this](const std_msgs::msg::String& m) {
+      std::lock_guard l(mu);
+      v.push_back(m.data);
+    });
+  }
+  std::size_t size() {
+    std::lock_guard l(mu);
+    return v.size();
+  }
+  std::string last() {
+    std::lock_guard l(mu);
+    return v.empty() ? "" : v.back();
+  }
+};
+
+std::optional<bmsg::TreeEvent> findEvent(Driver& d, const std::string& path_suffix, uint8_t to, std::size_t from = 0) {
+  std::lock_guard l(d.heard.mu);
+  for (std::size_t i = from; i < d.heard.events.size(); ++i) {
+    const auto& e = d.heard.events[i];
+    if (e.to_status == to && e.path.size() >= path_suffix.size() &&
+        e.path.compare(e.path.size() - path_suffix.size(), path_suffix.size(), path_suffix) == 0)
+      return e;
+  }
+  return std::nullopt;
+}
+}  // namespace
+
+TEST(BtComponent, RuntimeNodesCheckParametersCallServicesAndNavigateInTheSimulator) {
+  // The simulator (cmd_vel mode) serves sim/navigate_to; its container serves list_nodes.
+  const auto dir = std::filesystem::temp_directory_path() / ("cairn_bt_nav_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string world = (dir / "room.yaml").string();
+  std::ofstream(world) << "name: room\n"
+                          "walls:\n  - [[0, 0], [10, 0], [10, 6], [0, 6], [0, 0]]\n"
+                          "regions:\n  - {name: dock, rect: [7, 4, 9, 6]}\n"
+                          "robot:\n  start: [1, 3, 0]\n";
+  Container sim("sim_container");
+  cairn::LoadRequest sreq{"cairn_sim::Simulator", "simulator"};
+  sreq.parameters["world"] = world;
+  sreq.parameters["real_time_factor"] = 20.0;
+  sreq.parameters["laser.resolution_deg"] = 2.0;
+  sreq.parameters["people.world"] = false;
+  sreq.parameters["people.crowd"] = false;
+  const auto sl = sim.load(sreq);
+  if (!sl.ok && sl.error.find("cairn_sim::Simulator") != std::string::npos && sl.error.find("not found") != std::string::npos)
+    GTEST_SKIP() << "built without the sim component: " << sl.error;
+  ASSERT_TRUE(sl.ok) << sl.error;
+
+  Container c;
+  const auto loaded = c.load(kData + "/runtime_nodes.xml", /*autostart=*/false);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  Driver d;
+  Texts nodes(*d.node, "/bt_test/nodes");
+  ASSERT_TRUE(d.client->wait_for_service(20s));
+  ASSERT_TRUE(d.waitStatus([](const auto& s) { return s.state == TS::STATE_READY; }));
+  EXPECT_TRUE(d.command(C::START).success);
+  ASSERT_TRUE(d.waitStatus([](const auto& s) { return s.state == TS::STATE_FINISHED; }, 120s));
+  EXPECT_EQ(d.heard.lastStatus()->status, S::SUCCESS) << "every runtime node succeeded";
+  ASSERT_TRUE(d.exec.spin_until([&] { return nodes.size() >= 1; }, 10s));
+  EXPECT_NE(nodes.last().find("/simulator"), std::string::npos) << nodes.last();  // the ListNodes reply as text
+  ASSERT_TRUE(d.exec.spin_until([&] { std::lock_guard l(d.heard.mu); return !d.heard.done.empty(); }, 10s));
+  EXPECT_EQ(d.heard.done.back(), "arrived");  // NavigateTo's `message` from the simulator
+  // Both goals ran to arrival: RUNNING while driving, SUCCESS from the reply.
+  EXPECT_TRUE(findEvent(d, "/to_dock", S::RUNNING));
+  EXPECT_TRUE(findEvent(d, "/to_dock", S::SUCCESS));
+  EXPECT_TRUE(findEvent(d, "/to_pose", S::SUCCESS));
+  EXPECT_TRUE(findEvent(d, "/no_such_param", S::FAILURE)) << "an undeclared parameter is FAILURE";
+
+  // A navigation timeout is FAILURE (and cancels the goal on the server); a missing server too.
+  EXPECT_TRUE(d.command(C::SWITCH_TREE, "NavTimeout").success);
+  EXPECT_TRUE(d.command(C::START).success);
+  ASSERT_TRUE(d.waitStatus([](const auto& s) { return s.tree_id == "NavTimeout" && s.state == TS::STATE_FINISHED; }, 60s));
+  EXPECT_EQ(d.heard.lastStatus()->status, S::FAILURE);
+  EXPECT_TRUE(d.command(C::SWITCH_TREE, "NoServer").success);
+  EXPECT_TRUE(d.command(C::START).success);
+  ASSERT_TRUE(d.waitStatus([](const auto& s) { return s.tree_id == "NoServer" && s.state == TS::STATE_FINISHED; }, 60s));
+  EXPECT_EQ(d.heard.lastStatus()->status, S::FAILURE);
+}
+
+TEST(BtComponent, MonitorDetectsAKilledComponentTheLadderRestartsItAndTheTaskResumes) {
+  // The talker in a container of its own; the executive monitors /chatter's rate and /talker's liveness.
+  Container demo("demo_container");
+  cairn::LoadRequest treq{"cairn_demo::Talker", "talker"};
+  treq.parameters["rate_hz"] = 20.0;  // the launch parameter; a restart brings the talker back with its default (10 Hz)
+  const auto tl = demo.load(treq);
+  if (!tl.ok && tl.error.find("cairn_demo::Talker") != std::string::npos && tl.error.find("not found") != std::string::npos)
+    GTEST_SKIP() << "built without the demo component: " << tl.error;
+  ASSERT_TRUE(tl.ok) << tl.error;
+
+  Container c;
+  cairn::LoadRequest req{"cairn_bt::ExecutiveNode", "executive"};
+  req.parameters["tree_file"] = kData + "/monitored_task.xml";
+  req.parameters["tick_rate_hz"] = 20.0;
+  req.parameters["monitor.topics"] = std::vector<std::string>{"/chatter std_msgs/String 14 /talker"};
+  req.parameters["monitor.components"] = std::vector<std::string>{"/talker cairn_demo::Talker demo_container"};
+  const auto loaded = c.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  Driver d;
+  Texts progress(*d.node, "/bt_test/progress");
+  Texts alerts(*d.node, "/bt/alerts");
+  ASSERT_TRUE(d.exec.spin_until([&] { return progress.size() >= 5; }, 30s)) << "the task never ran";
+  EXPECT_FALSE(findEvent(d, "/restart/RestartComponent", S::RUNNING)) << "healthy: no recovery";
+
+  // Kill the component: its container drops it (its node and /chatter disappear).
+  ASSERT_FALSE(demo.mgr.unload(tl.unique_id).has_value());
+  std::size_t mark = 0;
+  {
+    std::lock_guard l(d.heard.mu);
+    mark = d.heard.events.size();
+  }
+  // The monitors see it, the arbiter blocks the task (its RUNNING ladder halts the task) and the ladder's first step restarts the talker through the container's services.
+  ASSERT_TRUE(d.exec.spin_until([&] { return findEvent(d, "/restart/RestartComponent", S::SUCCESS, mark).has_value(); }, 60s))
+      << "no restart";
+  EXPECT_TRUE(findEvent(d, "/arbiter/Sequence/Fallback/recover", S::RUNNING, mark)) << "the arbiter blocked the task";
+  EXPECT_TRUE(findEvent(d, "/monitored/task", S::IDLE, mark)) << "the running task was halted";
+  const auto listed = demo.mgr.list();
+  ASSERT_EQ(listed.size(), 1u);
+  EXPECT_EQ(listed[0].second, "/talker");
+  EXPECT_NE(listed[0].first, tl.unique_id) << "a new instance";
+
+  // The error clears (ErrorCleared re-checks after settle_ms), the task is released and resumes.
+  ASSERT_TRUE(d.exec.spin_until([&] { return findEvent(d, "/restart/SubTree", S::SUCCESS, mark).has_value(); }, 60s));
+  const std::size_t at_release = progress.size();
+  ASSERT_TRUE(d.exec.spin_until([&] { return progress.size() >= at_release + 5; }, 30s)) << "the task did not resume";
+  EXPECT_FALSE(findEvent(d, "/restart_again/RestartComponent", S::RUNNING, mark)) << "one restart was enough";
+  EXPECT_EQ(alerts.size(), 0u) << "no supervisor needed";
+  EXPECT_EQ(d.heard.lastStatus()->state, TS::STATE_RUNNING);
+}
+
 // ------------------------------------------------------------------------------------------------ launch validation
 namespace {
 std::string launchError(const std::string& params) {
@@ -331,6 +477,18 @@ TEST(BtComponentLaunch, TreeThatDoesNotLoadFailsValidationWithFileAndLine) {
       << e;
   EXPECT_NE(e.find("component_unknown_node.xml:5"), std::string::npos) << e;
   EXPECT_NE(e.find("unsupported message type 'std_msgs/NoSuchType'"), std::string::npos) << e;
+}
+
+TEST(BtComponentLaunch, BadServiceRequestAndMonitorSpecsFailValidation) {
+  auto e = launchError("{tree_file: " + kData + "/component_bad_service.xml}");
+  EXPECT_NE(e.find("component_bad_service.xml:5"), std::string::npos) << e;
+  EXPECT_NE(e.find("port 'request': expected true or false"), std::string::npos) << e;
+  e = launchError("{monitor.topics: ['/chatter std_msgs/String fast /talker']}");
+  EXPECT_NE(e.find("monitor.topics[0]: expected '<topic> <type> <expected_hz> <component>'"), std::string::npos) << e;
+  e = launchError("{monitor.topics: ['/chatter std_msgs/Nope 10 /talker']}");
+  EXPECT_NE(e.find("monitor.topics[0]: unknown message type 'std_msgs/Nope'"), std::string::npos) << e;
+  e = launchError("{monitor.components: ['talker']}");
+  EXPECT_NE(e.find("monitor.components[0]: expected '<node fqn> <class> <container>'"), std::string::npos) << e;
 }
 
 TEST(BtComponentLaunch, TickRateOutOfRangeFailsValidation) {

@@ -3,6 +3,8 @@
 // plumbing, message conversion and a wall timer that advances the core to `real_time_factor` × elapsed wall
 // time. All simulation (kinematics, laser, odometry noise, people, routes) is the core's.
 #include <algorithm>
+#include <functional>
+#include <optional>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -14,6 +16,7 @@
 #include "cairn/component.hpp"
 #include "cairn/sim/simulator.hpp"
 #include "cairn_sim_msgs/msg/PersonArray.hpp"
+#include "cairn_sim_msgs/srv/NavigateTo.hpp"
 #include "convert.hpp"
 #include "geometry_msgs/msg/Twist.hpp"
 #include "nav_msgs/msg/Odometry.hpp"
@@ -158,6 +161,9 @@ class Simulator : public cairn::Node {
     // std::invalid_argument from LaserConfig::validate() names the laser field and passes through.
     if (!waypoints.empty()) sim_->followRoute(waypoints, rc);
     route_mode_ = !waypoints.empty();
+    nav_config_ = rc;  // navigate_to drives one-waypoint routes at the route speed, without dwell or loop
+    nav_config_.dwell = 0.0;
+    nav_config_.loop = false;
 
     group_ = create_callback_group(cairn::CallbackGroup::Type::MutuallyExclusive);
     scan_pub_ = create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS::sensor_data());
@@ -169,6 +175,9 @@ class Simulator : public cairn::Node {
     clock_pub_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", cairn::QoS{}.keep_last(1));
     cmd_sub_ = create_subscription<geometry_msgs::msg::Twist>(
         "cmd_vel", cairn::QoS{}, [this](const geometry_msgs::msg::Twist& m) { onCmdVel(m); }, group_);
+    nav_srv_ = create_deferred_service<NavReq, NavResp>(
+        "sim/navigate_to", [this](const NavReq& req, std::function<void(NavResp)> reply) { onNavigateTo(req, std::move(reply)); },
+        group_);
 
     CAIRN_INFO(logger(), "world '" << sim_->world().name << "' (" << sim_->world().file << "), seed " << cfg.seed
                                    << ", " << rtf_ << "x real time, " << sim_->config().laser.beams() << " beams at "
@@ -184,13 +193,96 @@ class Simulator : public cairn::Node {
   }
 
  private:
+  using NavReq = cairn_sim_msgs::srv::NavigateTo_Request;
+  using NavResp = cairn_sim_msgs::srv::NavigateTo_Response;
+
+  // sim/navigate_to (the NavigateTo stand-in until a navigation component exists): drives a one-waypoint route
+  // with the core's RouteFollower on ground truth and replies when the goal ends. One goal at a time: a new goal
+  // preempts the old one, `cancel` stops it. Runs in group_, like tick(), so it never races the simulation.
+  void onNavigateTo(const NavReq& req, std::function<void(NavResp)> reply) {
+    NavResp resp;
+    if (req.cancel) {
+      const bool had = goal_.has_value();
+      endGoal(false, "cancelled");
+      if (had) sim_->setCommand({0.0, 0.0});
+      resp.success = true;
+      resp.message = had ? "cancelled the current goal" : "no goal to cancel";
+      fillPose(resp);
+      reply(resp);
+      return;
+    }
+    std::optional<sim::Vec2> goal;
+    if (route_mode_) {
+      resp.message = "driving the scripted route (parameter 'route'); navigate_to needs cmd_vel mode";
+    } else if (!req.location.empty()) {
+      const auto& world = sim_->world();
+      if (const sim::Region* r = world.region(req.location)) {
+        goal = r->centroid();
+      } else if (auto it = world.routes.find(req.location); it != world.routes.end() && !it->second.empty()) {
+        goal = it->second.back();
+      } else {
+        std::string known;
+        for (const auto& r : world.regions) known += (known.empty() ? "" : ", ") + r.name;
+        for (const auto& [name, wp] : world.routes) known += (known.empty() ? "" : ", ") + name;
+        resp.message = "location: world '" + world.name + "' has no region or route '" + req.location +
+                       "' (known: " + (known.empty() ? "none" : known) + ")";
+      }
+    } else if (!std::isfinite(req.x) || !std::isfinite(req.y)) {
+      resp.message = "x, y: goal is not finite";
+    } else {
+      goal = sim::Vec2{req.x, req.y};
+    }
+    if (!goal || !std::isfinite(req.timeout_s) || req.timeout_s < 0.0) {
+      if (goal) resp.message = "timeout_s: must be >= 0";
+      fillPose(resp);
+      reply(resp);
+      return;
+    }
+    endGoal(false, "preempted by a new goal");
+    sim_->followRoute({*goal}, nav_config_);
+    goal_ = Goal{std::move(reply), sim_->time(), req.timeout_s};
+  }
+
+  // After every simulation chunk: a goal ends when the follower reached it, or when its time is up.
+  void checkGoal() {
+    if (!goal_) return;
+    if (!sim_->routeActive()) {
+      endGoal(true, "arrived");
+    } else if (goal_->timeout_s > 0.0 && sim_->time() - goal_->start >= goal_->timeout_s) {
+      sim_->cancelRoute();
+      sim_->setCommand({0.0, 0.0});
+      endGoal(false, "timed out after " + std::to_string(goal_->timeout_s) + " s");
+    }
+  }
+
+  void endGoal(bool success, const std::string& message) {
+    if (!goal_) return;
+    if (!success) sim_->cancelRoute();
+    NavResp resp;
+    resp.success = success;
+    resp.message = message;
+    resp.elapsed_s = sim_->time() - goal_->start;
+    fillPose(resp);
+    auto reply = std::move(goal_->reply);
+    goal_.reset();
+    reply(resp);
+  }
+
+  void fillPose(NavResp& resp) const {
+    const sim::Pose2 p = sim_->groundTruth();
+    resp.x = p.x;
+    resp.y = p.y;
+    resp.yaw = p.theta;
+  }
+
   void onCmdVel(const geometry_msgs::msg::Twist& m) {
     if (!std::isfinite(m.linear.x) || !std::isfinite(m.angular.z)) {
       CAIRN_WARN(logger(), "cmd_vel: non-finite velocity ignored");
       return;
     }
     if (sim_->routeActive()) {
-      if (!warned_route_) CAIRN_WARN(logger(), "cmd_vel ignored: driving the scripted route (parameter 'route')");
+      if (!warned_route_)
+        CAIRN_WARN(logger(), "cmd_vel ignored: driving " << (goal_ ? "a navigate_to goal" : "the scripted route (parameter 'route')"));
       warned_route_ = true;
       return;
     }
@@ -230,6 +322,7 @@ class Simulator : public cairn::Node {
       out_.ground_truth.clear();
       sim_->advance(static_cast<double>(steps) * dt, out_);
       publishOutput();
+      checkGoal();
       if (sim_->time() >= next_people_ - 0.5 * dt) publishPeople();
       clock_pub_->publish(cv::toClock(sim_->time()));
     }
@@ -300,6 +393,14 @@ class Simulator : public cairn::Node {
   std::shared_ptr<cairn::Publisher<rosgraph_msgs::msg::Clock>> clock_pub_;
   std::shared_ptr<cairn::Subscription<geometry_msgs::msg::Twist>> cmd_sub_;
   std::shared_ptr<cairn::TimerBase> timer_;
+  struct Goal {
+    std::function<void(NavResp)> reply;
+    double start = 0.0;      ///< sim time of the request
+    double timeout_s = 0.0;  ///< 0: no limit
+  };
+  sim::RouteConfig nav_config_;
+  std::optional<Goal> goal_;
+  std::shared_ptr<cairn::Service<NavReq, NavResp>> nav_srv_;
 };
 
 }  // namespace cairn_sim

@@ -24,6 +24,7 @@
 #include "cairn/sim/carmen.hpp"
 #include "cairn/sim/simulator.hpp"
 #include "cairn_sim_msgs/msg/PersonArray.hpp"
+#include "cairn_sim_msgs/srv/NavigateTo.hpp"
 #include "geometry_msgs/msg/Twist.hpp"
 #include "nav_msgs/msg/Odometry.hpp"
 #include "rosgraph_msgs/msg/Clock.hpp"
@@ -333,6 +334,80 @@ TEST(SimulatorComponent, DrivesItsRoutePublishesPeopleAndDrivesSimTimeNodes) {
   }
   EXPECT_GT(composed, 20);
   std::filesystem::remove_all(dir);
+}
+
+TEST(SimulatorComponent, NavigateToDrivesToAPoseAndANamedLocationAndReportsArrival) {
+  // sim/navigate_to: the scripted driving as a goal service (the NavigateTo stand-in of the BT executive).
+  const auto dir = std::filesystem::temp_directory_path() / ("cairn_sim_nav_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string world = (dir / "room.yaml").string();
+  std::ofstream(world) << "name: room\n"
+                          "walls:\n  - [[0, 0], [10, 0], [10, 6], [0, 6], [0, 0]]\n"
+                          "regions:\n  - {name: dock, rect: [7, 4, 9, 6]}\n"
+                          "robot:\n  start: [1, 3, 0]\n";
+  Container c("nav_container");
+  cairn::LoadRequest req{"cairn_sim::Simulator", "simulator"};
+  req.parameters["world"] = world;
+  req.parameters["real_time_factor"] = 20.0;
+  req.parameters["laser.resolution_deg"] = 2.0;
+  req.parameters["people.world"] = false;
+  req.parameters["people.crowd"] = false;
+  const auto loaded = c.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+
+  Listener ls("navigator");
+  ls.start();
+  using cairn_sim_msgs::srv::NavigateTo_Request;
+  using cairn_sim_msgs::srv::NavigateTo_Response;
+  auto client = ls.node->create_client<NavigateTo_Request, NavigateTo_Response>("/sim/navigate_to");
+  ASSERT_TRUE(client->wait_for_service(20s));
+
+  NavigateTo_Request goal;  // a pose
+  goal.x = 5.0;
+  goal.y = 2.0;
+  auto r = client->call(goal, 60s);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_TRUE(r->success) << r->message;
+  EXPECT_EQ(r->message, "arrived");
+  EXPECT_NEAR(std::hypot(r->x - 5.0, r->y - 2.0), 0.0, 0.2);  // RouteConfig::tolerance 0.15 m + braking
+  EXPECT_GT(r->elapsed_s, 4.0 / 0.6 * 0.9);  // ~4.1 m at the 0.6 m/s route speed, in sim time
+
+  NavigateTo_Request named;  // a named location: the region's centre
+  named.location = "dock";
+  r = client->call(named, 60s);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_TRUE(r->success) << r->message;
+  EXPECT_NEAR(std::hypot(r->x - 8.0, r->y - 5.0), 0.0, 0.2);
+
+  named.location = "moon";  // unknown: an immediate failure naming the known places
+  r = client->call(named, 30s);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_FALSE(r->success);
+  EXPECT_NE(r->message.find("has no region or route 'moon' (known: dock)"), std::string::npos) << r->message;
+
+  NavigateTo_Request far;  // a timeout in sim time: the goal is given up and the robot stops short of it
+  far.x = 1.0;
+  far.y = 1.0;
+  far.timeout_s = 1.0;
+  r = client->call(far, 30s);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_FALSE(r->success);
+  EXPECT_NE(r->message.find("timed out"), std::string::npos) << r->message;
+  EXPECT_GT(std::hypot(r->x - 1.0, r->y - 1.0), 1.0);
+
+  // A goal is preempted by a cancel request from another call.
+  far.timeout_s = 0.0;
+  auto pending = client->async_send(far);
+  std::this_thread::sleep_for(50ms);
+  NavigateTo_Request cancel;
+  cancel.cancel = true;
+  r = client->call(cancel, 30s);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_TRUE(r->success);
+  ASSERT_EQ(pending.wait_for(30s), std::future_status::ready);
+  const auto cancelled = pending.get();
+  EXPECT_FALSE(cancelled.success);
+  EXPECT_EQ(cancelled.message, "cancelled");
 }
 
 TEST(SimulatorComponent, ScanStreamOverDdsEqualsTheCoreRunWithTheSameSeed) {
