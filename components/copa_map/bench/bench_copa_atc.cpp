@@ -35,7 +35,8 @@ int main(int argc, char** argv) {
   int max_iter = 4000;
   unsigned long seed = 1;
   int batch = 1000, hyper_every = 4;
-  double gamma = 0.1, gphom_gamma = 0.03;
+  double gamma = 0.1, gamma_end = -1, gphom_gamma = 0.03, tolerance = 1e-3;
+  bool train_z = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--data" && i + 1 < argc) dir = argv[++i];
@@ -50,9 +51,12 @@ int main(int argc, char** argv) {
     else if (a == "--hyper-every" && i + 1 < argc) hyper_every = std::atoi(argv[++i]);
     else if (a == "--gamma" && i + 1 < argc) gamma = std::atof(argv[++i]);
     else if (a == "--gphom-gamma" && i + 1 < argc) gphom_gamma = std::atof(argv[++i]);
+    else if (a == "--gamma-end" && i + 1 < argc) gamma_end = std::atof(argv[++i]);
+    else if (a == "--tolerance" && i + 1 < argc) tolerance = std::atof(argv[++i]);
+    else if (a == "--train-z") train_z = true;
     else {
       std::fprintf(stderr, "usage: %s [--data DIR] [--reduced] [--max-seconds S] [--max-iterations N] "
-                           "[--kmeans-inducing] [--no-gphom] [--no-copa] [--seed N] [--batch B] [--hyper-every K] [--gamma G] [--gphom-gamma G]\n", argv[0]);
+                           "[--kmeans-inducing] [--no-gphom] [--no-copa] [--seed N] [--batch B] [--hyper-every K] [--gamma G] [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z]\n", argv[0]);
       return 2;
     }
   }
@@ -69,7 +73,10 @@ int main(int argc, char** argv) {
     tc.seed = seed;
     tc.batch_size = batch;
     tc.hyper_every = hyper_every;
-    tc.natgrad_gamma_start = tc.natgrad_gamma_end = gamma;
+    tc.natgrad_gamma_start = gamma;
+    tc.natgrad_gamma_end = gamma_end >= 0 ? gamma_end : gamma;
+    tc.tolerance = tolerance;
+    tc.train_inducing = train_z;
     if (reduced) {
       // CI configuration: every 4th authors' inducing point.
       Eigen::MatrixXd Zr(Z.rows() / 4, 3);

@@ -21,6 +21,45 @@ inline void matern52(double d, double l, double& k, double& dk_dlogl) {
   dk_dlogl = 5.0 / 3.0 * r * r * (1.0 + kSqrt5 * r) * e;
 }
 
+// d k / d Δ of the unit-variance 1D Matérn-5/2 (eq. 4.9): -(5/3) (Δ/l²) (1 + √5 r) e^{-√5 r}, r = |Δ|/l.
+inline double matern52Slope(double d, double l) {
+  const double r = std::abs(d) / l;
+  return -5.0 / 3.0 * d / (l * l) * (1.0 + kSqrt5 * r) * std::exp(-kSqrt5 * r);
+}
+
+// Accumulates Σ_ij G_ij ∂k/∂Δ_ij (Δ = x1_i - x2_j) into rows i of d1 (+) and rows j of d2 (-); `slope` returns
+// the three components of ∂k/∂Δ for one pair. Parallel over the columns j (each thread owns its rows of d2 and
+// a private copy of d1).
+template <class Slope>
+void accumulateInputGrads(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2, const Eigen::MatrixXd& G,
+                          Eigen::MatrixXd* d1, Eigen::MatrixXd* d2, Slope&& slope) {
+  const Eigen::Index n1 = X1.rows(), n2 = X2.rows();
+  if (d2) *d2 = Eigen::MatrixXd::Zero(n2, 3);
+  std::vector<Eigen::MatrixXd> parts(static_cast<std::size_t>(omp_get_max_threads()));
+#pragma omp parallel if (n1 * n2 > kParallelMin)
+  {
+    Eigen::MatrixXd& acc = parts[static_cast<std::size_t>(omp_get_thread_num())];
+    if (d1) acc = Eigen::MatrixXd::Zero(n1, 3);
+#pragma omp for schedule(dynamic, 32)
+    for (Eigen::Index j = 0; j < n2; ++j) {
+      Eigen::RowVector3d dj = Eigen::RowVector3d::Zero();
+      for (Eigen::Index i = 0; i < n1; ++i) {
+        const double gij = G(i, j);
+        if (gij == 0.0) continue;
+        const Eigen::RowVector3d s = gij * slope(X1.row(i), X2.row(j));
+        if (d1) acc.row(i) += s;
+        dj -= s;
+      }
+      if (d2) d2->row(j) = dj;
+    }
+  }
+  if (d1) {
+    *d1 = Eigen::MatrixXd::Zero(n1, 3);
+    for (const auto& p : parts)
+      if (p.rows() == n1) *d1 += p;
+  }
+}
+
 // Thread-local partial sums reduced at the end (gradients).
 Eigen::VectorXd reduce(const std::vector<Eigen::VectorXd>& parts, int n) {
   Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
@@ -130,7 +169,7 @@ Eigen::VectorXd SpatioTemporalKernel::gradK(const Eigen::MatrixXd& X1, const Eig
   {
     Eigen::VectorXd& acc = parts[static_cast<std::size_t>(omp_get_thread_num())];
     std::vector<double> pc(comps_.size()), sc(comps_.size()), arg(comps_.size());
-#pragma omp for schedule(static)
+#pragma omp for schedule(dynamic, 32)
     for (Eigen::Index j = 0; j < n2; ++j) {
       for (Eigen::Index i = 0; i < n1; ++i) {
         const double gij = G(i, j);
@@ -168,6 +207,25 @@ Eigen::VectorXd SpatioTemporalKernel::gradKdiag(const Eigen::MatrixXd& X, const 
   const double s = g.sum();
   for (std::size_t c = 0; c < comps_.size(); ++c) out[2 + 3 * c] = s * comps_[c].variance;
   return out;
+}
+
+void SpatioTemporalKernel::gradInputs(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2,
+                                      const Eigen::MatrixXd& G, Eigen::MatrixXd* d1, Eigen::MatrixXd* d2) const {
+  accumulateInputGrads(X1, X2, G, d1, d2, [this](const auto& a, const auto& b) {
+    const double dx1 = a(0) - b(0), dx2 = a(1) - b(1), dt = a(2) - b(2);
+    double k1, k2, tmp;
+    matern52(dx1, ls1_, k1, tmp);
+    matern52(dx2, ls2_, k2, tmp);
+    double kt = 0.0, dkt = 0.0;
+    for (const auto& c : comps_) {
+      const double arg = kPi * dt / c.period, sn = std::sin(arg);
+      const double l2 = c.lengthscale * c.lengthscale;
+      const double pc = c.variance * std::exp(-0.5 * sn * sn / l2);
+      kt += pc;
+      dkt -= pc * sn * std::cos(arg) * kPi / (c.period * l2);  // d/dΔt of eq. 4.10
+    }
+    return Eigen::RowVector3d(matern52Slope(dx1, ls1_) * k2 * kt, k1 * matern52Slope(dx2, ls2_) * kt, k1 * k2 * dkt);
+  });
 }
 
 RbfKernel::RbfKernel(double variance, Eigen::Vector3d lengthscales) : var_(variance), ls_(lengthscales) {
@@ -232,7 +290,7 @@ Eigen::VectorXd RbfKernel::gradK(const Eigen::MatrixXd& X1, const Eigen::MatrixX
 #pragma omp parallel if (n1 * n2 > kParallelMin)
   {
     Eigen::VectorXd& acc = parts[static_cast<std::size_t>(omp_get_thread_num())];
-#pragma omp for schedule(static)
+#pragma omp for schedule(dynamic, 32)
     for (Eigen::Index j = 0; j < n2; ++j)
       for (Eigen::Index i = 0; i < n1; ++i) {
         double u[3], q = 0.0;
@@ -240,6 +298,7 @@ Eigen::VectorXd RbfKernel::gradK(const Eigen::MatrixXd& X1, const Eigen::MatrixX
           u[d] = (X1(i, d) - X2(j, d)) * il[d];
           q += u[d] * u[d];
         }
+        if (G(i, j) == 0.0) continue;
         const double k = G(i, j) * var_ * std::exp(-0.5 * q);
         acc[0] += k;
         for (int d = 0; d < 3; ++d) acc[1 + d] += k * u[d] * u[d];
@@ -253,6 +312,16 @@ Eigen::VectorXd RbfKernel::gradKdiag(const Eigen::MatrixXd& X, const Eigen::Vect
   Eigen::VectorXd out = Eigen::VectorXd::Zero(4);
   out[0] = g.sum() * var_;
   return out;
+}
+
+void RbfKernel::gradInputs(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2, const Eigen::MatrixXd& G,
+                           Eigen::MatrixXd* d1, Eigen::MatrixXd* d2) const {
+  const Eigen::Vector3d il2 = ls_.cwiseInverse().cwiseAbs2();
+  accumulateInputGrads(X1, X2, G, d1, d2, [this, &il2](const auto& a, const auto& b) {
+    const Eigen::RowVector3d d = a - b;
+    const double k = var_ * std::exp(-0.5 * d.cwiseAbs2().dot(il2.transpose()));
+    return Eigen::RowVector3d(-k * d.cwiseProduct(il2.transpose()));
+  });
 }
 
 std::unique_ptr<Kernel> makeKernel(const std::string& type, const Eigen::VectorXd& params) {

@@ -103,6 +103,8 @@ void applyConfig(const std::string& path, CopaMapConfig& mc, TrainConfig& tc) {
     else if (key == "hyper_every") tc.hyper_every = static_cast<int>(v);
     else if (key == "hyper_warmup") tc.hyper_warmup = static_cast<int>(v);
     else if (key == "train_hyper") tc.train_hyper = v != 0;
+    else if (key == "train_inducing") tc.train_inducing = v != 0;
+    else if (key == "inducing_lr") tc.inducing_lr = v;
     else if (key == "tolerance") tc.tolerance = v;
     else if (key == "seed") tc.seed = mc.seed = mc.period_init.seed = static_cast<std::uint64_t>(v);
     else if (key == "alpha_ind") mc.alpha_ind = v;

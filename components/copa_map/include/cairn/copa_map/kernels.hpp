@@ -29,6 +29,10 @@ class Kernel {
                                 const Eigen::MatrixXd& G) const = 0;
   // Σ_i g_i ∂k(x_i, x_i) / ∂θ_p.
   virtual Eigen::VectorXd gradKdiag(const Eigen::MatrixXd& X, const Eigen::VectorXd& g) const = 0;
+  // Input gradients of Σ_ij G_ij k(X1_i, X2_j): d1 (n1 x 3) w.r.t. the rows of X1 and d2 (n2 x 3) w.r.t. the rows
+  // of X2 (either may be nullptr). Used to train the inducing inputs Z.
+  virtual void gradInputs(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2, const Eigen::MatrixXd& G,
+                          Eigen::MatrixXd* d1, Eigen::MatrixXd* d2) const = 0;
   virtual std::unique_ptr<Kernel> clone() const = 0;
 };
 
@@ -59,6 +63,8 @@ class SpatioTemporalKernel final : public Kernel {
   Eigen::VectorXd gradK(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2,
                         const Eigen::MatrixXd& G) const override;
   Eigen::VectorXd gradKdiag(const Eigen::MatrixXd& X, const Eigen::VectorXd& g) const override;
+  void gradInputs(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2, const Eigen::MatrixXd& G,
+                  Eigen::MatrixXd* d1, Eigen::MatrixXd* d2) const override;
   std::unique_ptr<Kernel> clone() const override { return std::make_unique<SpatioTemporalKernel>(*this); }
 
   double lengthscale1() const { return ls1_; }
@@ -90,6 +96,8 @@ class RbfKernel final : public Kernel {
   Eigen::VectorXd gradK(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2,
                         const Eigen::MatrixXd& G) const override;
   Eigen::VectorXd gradKdiag(const Eigen::MatrixXd& X, const Eigen::VectorXd& g) const override;
+  void gradInputs(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2, const Eigen::MatrixXd& G,
+                  Eigen::MatrixXd* d1, Eigen::MatrixXd* d2) const override;
   std::unique_ptr<Kernel> clone() const override { return std::make_unique<RbfKernel>(*this); }
   double variance() const { return var_; }
   const Eigen::Vector3d& lengthscales() const { return ls_; }

@@ -116,6 +116,7 @@ struct ElboEvaluation {
   double ell = 0;   // unscaled Σ_batch E[log p]
   double kl = 0;
   Eigen::VectorXd hyper_grad;  // ∂elbo/∂(unconstrained kernel parameters of all latents, concatenated)
+  std::vector<Eigen::MatrixXd> z_grad;  // ∂elbo/∂Z per latent (m x 3), when requested
   struct PerLatent {
     Eigen::MatrixXd Kinv;  // K_uu⁻¹
     Eigen::VectorXd b;     // Aᵀ ∂E/∂m   (A = K_nu K_uu⁻¹)
@@ -135,8 +136,9 @@ class SvgpModel {
   SvgpModel& operator=(SvgpModel&&) = default;
 
   // ELBO (eq. 4.12) on a batch; `scale` = n / batch size makes it an unbiased estimate of the full bound.
-  ElboEvaluation evaluate(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, double scale,
-                          bool hyper_grad) const;
+  // `hyper_grad`: gradient w.r.t. the kernel parameters; `z_grad`: w.r.t. the inducing inputs Z (q(u) fixed).
+  ElboEvaluation evaluate(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, double scale, bool hyper_grad,
+                          bool z_grad = false) const;
   // q(f*) marginals of latent k (eqs. 4.13-4.16), computed in chunks.
   LatentMoments latentMoments(int k, const Eigen::MatrixXd& X) const;
   // Predictive mean and variance of y in model (standardized) units.
@@ -161,7 +163,9 @@ class SvgpModel {
  private:
   struct KuuCache {
     Eigen::VectorXd params;
+    Eigen::MatrixXd Z;
     Eigen::LLT<Eigen::MatrixXd> llt;
+    Eigen::MatrixXd Linv;  // L_K⁻¹
     Eigen::MatrixXd Kinv;
   };
   const KuuCache& kuu(int k) const;
@@ -184,6 +188,10 @@ struct TrainConfig {
   double adam_lr_end = 1e-3;
   int decay_steps = 100;             // linear decay over the first 100 steps (§4.2.5)
   bool train_hyper = true;
+  // Adam on the inducing inputs Z of every latent (the "and optionally Z"), on the same steps as the
+  // hyperparameters; step size in input units (m, time units). Off by default (see the README for ATC).
+  bool train_inducing = false;
+  double inducing_lr = 0.02;
   int hyper_warmup = 0;              // natural-gradient-only steps before Adam starts
   int hyper_every = 1;               // Adam step on every k-th mini-batch (others: natural gradient only)
   double tolerance = 1e-3;           // stop when the epoch-mean ELBO changes relatively less (copa-map: 1e-3)
