@@ -16,6 +16,8 @@
 #include <filesystem>
 #include <fstream>
 #include <unistd.h>
+#include <sys/wait.h>
+#include <cstdio>
 #include "cairn/launch.hpp"
 #include "cairn_bt_msgs/msg/TreeEvent.hpp"
 #include "cairn_bt_msgs/msg/TreeStatus.hpp"
@@ -309,6 +311,38 @@ TEST(BtComponent, TimersRunOnSimTime) {
   EXPECT_EQ(done->stamp.sec, 700) << "the Wait completed at the sim time that passed its deadline";
 }
 
+// ------------------------------------------------------------------------------------------------ remote watch
+namespace {
+/// Runs a shell command; its stdout+stderr and exit code.
+std::pair<std::string, int> runCommand(const std::string& cmd) {
+  std::string out;
+  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
+  if (p == nullptr) return {"popen failed", -1};
+  char buf[4096];
+  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
+  const int st = ::pclose(p);
+  return {out, WIFEXITED(st) ? WEXITSTATUS(st) : -1};
+}
+}  // namespace
+
+TEST(BtWatchCli, RendersTheLiveTreeOfARunningExecutiveFromItsStatusTopic) {
+  Container c;
+  const auto loaded = c.load(kData + "/component_tree.xml", /*autostart=*/true);  // waits on bt_test/go forever
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  const auto [out, rc] = runCommand(std::string(CAIRN_BT_EXE) + " watch --topic /bt/status --count 3 --timeout 30");
+  EXPECT_EQ(rc, 0) << out;
+  std::size_t frames = 0;
+  for (std::size_t at = 0; (at = out.find("/bt/status  tree ", at)) != std::string::npos; ++at) ++frames;
+  EXPECT_EQ(frames, 3u) << out;
+  EXPECT_NE(out.find("running"), std::string::npos) << out;
+  EXPECT_NE(out.find("await_go"), std::string::npos) << out;  // the node the tree is waiting in
+  EXPECT_NE(out.find("RUNNING"), std::string::npos) << out;
+
+  const auto [out2, rc2] = runCommand(std::string(CAIRN_BT_EXE) + " watch --topic /nobody/bt/status --once --timeout 0.5");
+  EXPECT_EQ(rc2, 1) << out2;
+  EXPECT_NE(out2.find("cairn: /nobody/bt/status: no tree status within 0.5 s"), std::string::npos) << out2;
+}
+
 // ------------------------------------------------------------------------------------------------ runtime nodes
 namespace {
 /// Collects the std_msgs/String messages of one topic.
@@ -463,6 +497,10 @@ TEST(BtComponentLaunch, ValidTreeFilePasses) {
 TEST(BtComponentLaunch, ShippedDemoTreeResolvesByName) {
   // A relative tree_file falls back to the package's trees/ (the demo launch spec uses this one).
   EXPECT_EQ(launchError("{tree_file: demo_chatter.xml}"), "");
+}
+
+TEST(BtComponentLaunch, ShippedErrandsTreeWithRuntimeNodesLoads) {
+  EXPECT_EQ(launchError("{tree_file: sim_errands.xml}"), "");
 }
 
 TEST(BtComponentLaunch, MissingTreeFileFailsValidation) {

@@ -2,11 +2,14 @@
 //   cairn-bt run <file.xml> [--tree ID] [--max-ticks N] [--period-ms P] [--trace] [--log FILE] [--no-wait]
 //   cairn-bt replay <trace.log>             print a recorded trace in the --trace format
 //   cairn-bt watch <trace.log> [--follow]   live tree view of a trace file being written (tmux-friendly)
+//   cairn-bt watch --topic [NAME] [--count N | --once] [--timeout S]
+//                                           live tree view of a running executive (its latched bt/status over DDS)
 //   cairn-bt model                          <TreeNodesModel> of the built-in nodes
 //   cairn-bt psbt-eval [--starts N] [--seed S] [--n-pl N] [--hotspots K] [--xml FILE]
 //                                           model-based comparison of Stüde §5.4.4 on a synthetic 50 m x 25 m map
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iostream>
@@ -17,6 +20,16 @@
 #include "cairn/bt_executive/psbt.hpp"
 #include "cairn/bt_executive/trace.hpp"
 #include "cairn/bt_executive/xml_loader.hpp"
+#ifdef CAIRN_BT_WITH_RUNTIME
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <unistd.h>
+
+#include "cairn/bt_executive/executive.hpp"
+#include "cairn/node.hpp"
+#include "cairn_bt_msgs/msg/TreeStatus.hpp"
+#endif
 
 using namespace cairn::bt;
 
@@ -28,6 +41,7 @@ int usage() {
                "[--no-wait]\n"
                "       cairn bt replay <trace.log>\n"
                "       cairn bt watch <trace.log> [--follow] [--interval-ms N]\n"
+               "       cairn bt watch --topic [NAME=/bt/status] [--count N | --once] [--timeout S]\n"
                "       cairn bt model\n"
                "       cairn bt psbt-eval [--starts N] [--seed S] [--n-pl N] [--hotspots K] [--xml FILE]\n");
   return 2;
@@ -169,10 +183,84 @@ int cmdReplay(int argc, char** argv) {
   return 0;
 }
 
+#ifdef CAIRN_BT_WITH_RUNTIME
+/// Remote watch: renders every TreeStatus heard on `topic` (latched: the current one at once, then one frame per
+/// tick or command of the executive). Stops after `count` frames (0: until SIGINT); exit 1 if no frame arrives
+/// within `timeout_s` (0: wait forever).
+int watchTopic(const std::string& topic, long count, double timeout_s) {
+  cairn::Executor exec;
+  cairn::NodeOptions o("bt_watch_" + std::to_string(::getpid()), &exec);
+  o.start_parameter_services = false;
+  cairn::Node node(o);
+  std::mutex mu;
+  std::deque<cairn_bt_msgs::msg::TreeStatus> frames;
+  auto sub = node.create_subscription<cairn_bt_msgs::msg::TreeStatus>(
+      topic, cairn::QoS::latched(), [&](const cairn_bt_msgs::msg::TreeStatus& s) {
+        std::lock_guard l(mu);
+        frames.push_back(s);
+      });
+  cairn::Executor::install_signal_handlers();
+  const bool tty = isatty(fileno(stdout));
+  const auto wait = timeout_s > 0 ? std::chrono::nanoseconds(static_cast<std::int64_t>(timeout_s * 1e9))
+                                  : std::chrono::nanoseconds(std::chrono::hours(24 * 365));
+  for (long shown = 0; count <= 0 || shown < count;) {
+    const bool got = exec.spin_until(
+        [&] {
+          std::lock_guard l(mu);
+          return !frames.empty() || cairn::Executor::signal_received();
+        },
+        wait);
+    if (cairn::Executor::signal_received()) return 0;
+    if (!got) {
+      std::fprintf(stderr, "cairn: %s: no tree status within %g s\n", node.resolve_name(topic).c_str(), timeout_s);
+      return 1;
+    }
+    cairn_bt_msgs::msg::TreeStatus s;
+    {
+      std::lock_guard l(mu);
+      s = std::move(frames.front());
+      frames.pop_front();
+    }
+    try {
+      const StatusSnapshot snap = parseStatusJson(s.status_json);
+      if (tty) std::printf("\033[H\033[2J");
+      std::printf("%s  tree %s  %s  step %llu\n%s", node.resolve_name(topic).c_str(), snap.tree.c_str(),
+                  snap.state.c_str(), static_cast<unsigned long long>(snap.step),
+                  renderTree(snap.paths, snap.statuses, tty).c_str());
+      std::fflush(stdout);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "cairn: %s: bad status_json: %s\n", node.resolve_name(topic).c_str(), e.what());
+      return 2;
+    }
+    ++shown;
+  }
+  return 0;
+}
+#endif
+
 int cmdWatch(int argc, char** argv) {
   std::string file;
   bool follow = false;
   long interval = 200;
+  if (argc >= 1 && std::strcmp(argv[0], "--topic") == 0) {
+    std::string topic = "/bt/status";
+    long count = 0;
+    double timeout_s = 0;
+    for (int i = 1; i < argc; ++i) {
+      std::string a = argv[i];
+      if (a == "--once") count = 1;
+      else if (a == "--count" && i + 1 < argc && parseInt(argv[i + 1], count) && count > 0) ++i;
+      else if (a == "--timeout" && i + 1 < argc) timeout_s = std::atof(argv[++i]);
+      else if (i == 1 && a.rfind("--", 0) != 0) topic = a;
+      else return usage();
+    }
+#ifdef CAIRN_BT_WITH_RUNTIME
+    return watchTopic(topic, count, timeout_s);
+#else
+    std::fprintf(stderr, "cairn: bt watch --topic: cairn-bt was built without the runtime (cairn_executor)\n");
+    return 2;
+#endif
+  }
   for (int i = 0; i < argc; ++i) {
     std::string a = argv[i];
     if (a == "--follow") follow = true;
