@@ -367,7 +367,7 @@ class PeopleTracker : public cairn::Node {
     }
     // Published detections: the detector's own pairing (laser frame); tracking pairs the legs with the tracks.
     const std::vector<pt::PersonDetection> dets = pt::pairLegs(legs, detector_->params());
-    const pt::TrackerStatus st = tracker_->updateLegs(scan.stamp, legs, sensor, detector_->params());
+    const pt::TrackerStatus st = tracker_->updateLegs(scan.stamp, legs, sensor, detector_->params(), &scan);
     if (st.reset) warn("tracker_reset", "tracker reset: " + st.reason);
     last_tracks_ = tracker_->outputTracks();
     last_sensor_ = sensor;

@@ -233,7 +233,7 @@ BenchResult runBench(const BenchParams& params) {
     const auto legs = detector.detectLegs(sim.scan);
     const auto dets = pairLegs(legs, params.detector);
     const auto c1 = Clock::now();
-    if (params.track_aware_pairing) tracker.updateLegs(t, legs, pose, params.detector);
+    if (params.track_aware_pairing) tracker.updateLegs(t, legs, pose, params.detector, &sim.scan);
     else tracker.update(t, dets, pose);
     const auto c2 = Clock::now();
     std::vector<PersonDetection> dets_frame = dets;

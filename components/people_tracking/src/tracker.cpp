@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <numeric>
 
 #include "cairn/people_tracking/assignment.hpp"
@@ -23,6 +24,7 @@ PeopleTracker::PeopleTracker(TrackerParams params) : params_(params) {}
 
 void PeopleTracker::reset() {
   tracks_.clear();
+  deleted_.clear();
   has_stamp_ = false;
 }
 
@@ -35,8 +37,12 @@ std::vector<Track> PeopleTracker::confirmedTracks() const {
 
 std::vector<Track> PeopleTracker::outputTracks() const {
   std::vector<Track> out;
-  for (const auto& t : tracks_)
-    if (t.confirmed && t.stamp - t.last_update <= params_.publish_coast_time) out.push_back(t);
+  for (const auto& t : tracks_) {
+    if (!t.confirmed || t.visibility == Visibility::kFreeSpace) continue;
+    const double coast = t.stamp - t.last_update;
+    if (coast <= params_.publish_coast_time || (t.occluded_since_update && coast <= params_.occluded_coast_time))
+      out.push_back(t);
+  }
   return out;
 }
 
@@ -57,6 +63,23 @@ struct Innovation {
   Eigen::Matrix2d S;
   double d2 = 0.0;
 };
+// Constant-velocity prediction with continuous white-noise acceleration (spectral density q):
+// Q = q [dt^3/3 I, dt^2/2 I; dt^2/2 I, dt I].
+void predictTrack(Track& t, double stamp, double q) {
+  const double dt = stamp - t.stamp;
+  if (dt <= 0.0) return;
+  Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
+  F(0, 2) = F(1, 3) = dt;
+  Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
+  const double a = q * dt * dt * dt / 3.0, b = q * dt * dt / 2.0, c = q * dt;
+  Q(0, 0) = Q(1, 1) = a;
+  Q(0, 2) = Q(2, 0) = Q(1, 3) = Q(3, 1) = b;
+  Q(2, 2) = Q(3, 3) = c;
+  t.state = F * t.state;
+  t.covariance = F * t.covariance * F.transpose() + Q;
+  t.stamp = stamp;
+}
+
 Innovation innovation(const Track& t, const PersonDetection& d) {
   Innovation in;
   in.nu = d.position - t.state.head<2>();
@@ -81,6 +104,7 @@ TrackerStatus PeopleTracker::checkTime(double stamp) {
   last_stamp_ = stamp;
   has_stamp_ = true;
   updated_.assign(tracks_.size(), false);
+  for (Track& t : tracks_) t.visibility = Visibility::kUnknown;
   return status;
 }
 
@@ -94,7 +118,18 @@ void PeopleTracker::associate(const std::vector<PersonDetection>& dets, std::vec
   for (std::size_t i = 0; i < tracks_.size(); ++i) {
     Track& t = tracks_[i];
     t.confidence += params_.confidence_gain * ((updated_[i] ? 1.0 : 0.0) - t.confidence);
-    if (updated_[i] && !t.confirmed && t.hits >= params_.confirm_hits) t.confirmed = true;
+    if (updated_[i]) {
+      t.visibility = Visibility::kDetected;
+      t.free_space_scans = 0;
+      t.occluded_since_update = true;  // vacuous until the first miss
+    } else {
+      t.free_space_scans = t.visibility == Visibility::kFreeSpace ? t.free_space_scans + 1 : 0;
+      t.occluded_since_update = t.occluded_since_update && t.visibility == Visibility::kOccluded;
+    }
+    if (updated_[i] && !t.confirmed && t.hits >= params_.confirm_hits) {
+      t.confirmed = true;
+      if (params_.reid_window > 0.0) reidentify(i);
+    }
   }
   initiate(dets, used);
   prune();
@@ -112,7 +147,8 @@ TrackerStatus PeopleTracker::updateInFrame(double stamp, const std::vector<Perso
 }
 
 TrackerStatus PeopleTracker::updateLegs(double stamp, const std::vector<LegDetection>& legs,
-                                        const Pose2& sensor_pose, const DetectorParams& pairing) {
+                                        const Pose2& sensor_pose, const DetectorParams& pairing,
+                                        const LaserScan* scan) {
   const TrackerStatus status = checkTime(stamp);
   std::vector<LegDetection> in_frame;
   in_frame.reserve(legs.size());
@@ -133,8 +169,43 @@ TrackerStatus PeopleTracker::updateLegs(double stamp, const std::vector<LegDetec
       used[j] = true;
     }
   }
+  if (scan) classifyVisibility(*scan, sensor_pose);
   associate(dets, used);
   return status;
+}
+
+// Negative information from the scan for tracks that got no leg: look at the beams within visibility_radius of
+// the predicted position. Most of them ending well before it: occluded. All of them passing behind it (or
+// without return): nobody is there. Otherwise something is there that was not detected as legs.
+void PeopleTracker::classifyVisibility(const LaserScan& scan, const Pose2& sensor_pose) {
+  const double rho = params_.visibility_radius;
+  const long n = static_cast<long>(scan.ranges.size());
+  for (std::size_t i = 0; i < tracks_.size(); ++i) {
+    Track& t = tracks_[i];
+    if (updated_[i]) continue;
+    const Eigen::Vector2d p = sensor_pose.inverseTransform(t.position());
+    const double r = p.norm();
+    Visibility vis = Visibility::kUnknown;
+    if (r > rho) {
+      const double half = std::asin(rho / r);
+      const double bearing = std::atan2(p.y(), p.x());
+      const long lo = static_cast<long>(std::ceil((bearing - half - scan.angle_min) / scan.angle_increment));
+      const long hi = static_cast<long>(std::floor((bearing + half - scan.angle_min) / scan.angle_increment));
+      int front = 0, behind = 0, total = 0;
+      for (long k = std::max(0L, lo); k <= std::min(n - 1, hi); ++k) {
+        ++total;
+        const auto b = static_cast<std::size_t>(k);
+        if (!scan.valid(b) || scan.ranges[b] > r + rho) ++behind;
+        else if (scan.ranges[b] < r - rho) ++front;
+      }
+      if (total >= 2) {
+        if (2 * front >= total) vis = Visibility::kOccluded;
+        else if (behind == total) vis = Visibility::kFreeSpace;
+        else vis = Visibility::kMissed;
+      }
+    }
+    t.visibility = vis;
+  }
 }
 
 // Track-aware leg pairing: rows are two leg slots per track, columns the legs plus one "no leg" column per slot
@@ -160,8 +231,8 @@ std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<Leg
     Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nr, nc + nr, kForbidden);
     for (std::size_t r = 0; r < rows.size(); ++r) {
       const Track& t = tracks_[rows[r]];
-      const Eigen::Matrix2d S = t.positionCovariance() + (spread2 + pairing.sigma_pair * pairing.sigma_pair) *
-                                                             Eigen::Matrix2d::Identity();
+      const Eigen::Matrix2d S = t.positionCovariance() + legSpread(t) +
+                                pairing.sigma_pair * pairing.sigma_pair * Eigen::Matrix2d::Identity();
       const Eigen::Matrix2d Si = S.inverse();
       // Negative log-likelihood: the log-determinant keeps uncertain (coasting) tracks from taking legs that a
       // well-localised neighbour explains. "No leg" costs the gate plus the log-determinant of a perfectly
@@ -220,21 +291,42 @@ std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<Leg
 }
 
 void PeopleTracker::predict(double stamp) {
-  for (Track& t : tracks_) {
-    const double dt = stamp - t.stamp;
-    if (dt <= 0.0) continue;
-    Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
-    F(0, 2) = F(1, 3) = dt;
-    const double q = params_.process_noise;
-    Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
-    const double a = q * dt * dt * dt / 3.0, b = q * dt * dt / 2.0, c = q * dt;
-    Q(0, 0) = Q(1, 1) = a;
-    Q(0, 2) = Q(2, 0) = Q(1, 3) = Q(3, 1) = b;
-    Q(2, 2) = Q(3, 3) = c;
-    t.state = F * t.state;
-    t.covariance = F * t.covariance * F.transpose() + Q;
-    t.stamp = stamp;
+  for (Track& t : tracks_) predictTrack(t, stamp, params_.process_noise);
+}
+
+Eigen::Matrix2d PeopleTracker::legSpread(const Track& t) const {
+  const double along2 = params_.leg_spread_sigma * params_.leg_spread_sigma;
+  const Eigen::Vector2d v = t.velocity();
+  const double speed = v.norm();
+  if (!(speed > params_.leg_spread_min_speed)) return along2 * Eigen::Matrix2d::Identity();
+  const Eigen::Vector2d u = v / speed;
+  const double lat = std::min(params_.leg_spread_lateral_sigma, params_.leg_spread_sigma);
+  const Eigen::Matrix2d uu = u * u.transpose();
+  return along2 * uu + lat * lat * (Eigen::Matrix2d::Identity() - uu);
+}
+
+// Re-identification of a recently deleted confirmed track (typically lost behind someone for longer than
+// delete_timeout): the new track takes the old id if it lies within the gate of the old track's prediction.
+void PeopleTracker::reidentify(std::size_t new_track) {
+  Track& n = tracks_[new_track];
+  double best = std::numeric_limits<double>::infinity();
+  std::size_t best_k = deleted_.size();
+  for (std::size_t k = 0; k < deleted_.size(); ++k) {
+    if (last_stamp_ - deleted_[k].deleted > params_.reid_window) continue;
+    Track old = deleted_[k].track;
+    predictTrack(old, last_stamp_, params_.process_noise);
+    const Eigen::Vector2d nu = n.position() - old.position();
+    const Eigen::Matrix2d S = old.positionCovariance() + n.positionCovariance();
+    const double d2 = nu.dot(S.ldlt().solve(nu));
+    if (d2 > params_.reid_gate_chi2) continue;
+    const double cost = d2 + std::log(S.determinant());
+    if (cost < best) best = cost, best_k = k;
   }
+  if (best_k == deleted_.size()) return;
+  n.id = deleted_[best_k].track.id;
+  n.first_stamp = deleted_[best_k].track.first_stamp;
+  if (n.leg_separation <= 0.0) n.leg_separation = deleted_[best_k].track.leg_separation;
+  deleted_.erase(deleted_.begin() + static_cast<long>(best_k));
 }
 
 void PeopleTracker::applyUpdate(Track& t, const PersonDetection& d) {
@@ -423,12 +515,18 @@ void PeopleTracker::initiate(const std::vector<PersonDetection>& dets, const std
 }
 
 void PeopleTracker::prune() {
+  std::erase_if(deleted_, [&](const Deleted& d) { return last_stamp_ - d.deleted > params_.reid_window; });
   std::erase_if(tracks_, [&](const Track& t) {
     const double since = last_stamp_ - t.last_update;
-    if (!t.confirmed && since > params_.tentative_timeout) return true;
-    if (t.confirmed && since > params_.delete_timeout) return true;
     const double max_var = t.positionCovariance().diagonal().maxCoeff();
-    return max_var > params_.max_position_sigma * params_.max_position_sigma;
+    const double timeout = t.occluded_since_update ? std::max(params_.delete_timeout, params_.occluded_delete_timeout)
+                                                   : params_.delete_timeout;
+    const bool remove = (!t.confirmed && since > params_.tentative_timeout) ||
+                        (t.confirmed && since > timeout) ||
+                        t.free_space_scans >= params_.free_space_delete_scans ||
+                        max_var > params_.max_position_sigma * params_.max_position_sigma;
+    if (remove && t.confirmed && params_.reid_window > 0.0) deleted_.push_back({t, last_stamp_});
+    return remove;
   });
 }
 

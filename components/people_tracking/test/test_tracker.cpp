@@ -172,3 +172,128 @@ TEST(Tracker, IgnoresNonFiniteDetections) {
   ASSERT_EQ(tracker.tracks().size(), 1u);
   EXPECT_TRUE(tracker.tracks()[0].position().allFinite());
 }
+
+namespace {
+std::vector<LegDetection> legsAt(const Eigen::Vector2d& c, double swing = 0.1) {
+  return {{c + Eigen::Vector2d(swing, 0.1), 0.9, 0.12}, {c + Eigen::Vector2d(-swing, -0.1), 0.9, 0.12}};
+}
+// 360 beams over 360 deg (sensor at the origin, tracking frame = sensor frame): a wall circle of radius 6 m and
+// opaque discs (centre, radius).
+LaserScan scanOf(double stamp, const std::vector<std::pair<Eigen::Vector2d, double>>& discs) {
+  LaserScan s;
+  s.stamp = stamp;
+  s.angle_min = -M_PI;
+  s.angle_increment = 2 * M_PI / 360;
+  s.range_min = 0.05;
+  s.range_max = 20.0;
+  for (int i = 0; i < 360; ++i) {
+    const Eigen::Vector2d u(std::cos(s.angle(static_cast<std::size_t>(i))), std::sin(s.angle(static_cast<std::size_t>(i))));
+    double r = 6.0;
+    for (const auto& [c, rad] : discs) {
+      const double b = u.dot(c), disc = b * b - c.squaredNorm() + rad * rad;
+      if (disc >= 0 && b - std::sqrt(disc) > 0) r = std::min(r, b - std::sqrt(disc));
+    }
+    s.ranges.push_back(static_cast<float>(r));
+  }
+  return s;
+}
+}  // namespace
+
+TEST(Tracker, CoastingTrackDoesNotReachSidewaysForANeighboursLeg) {
+  // A person walks along +x at 1 m/s; then only one leg is seen, 0.6 m beside the prediction (a neighbour's) or
+  // 0.6 m ahead of it (its own leg in mid stride). The leg spread is anisotropic along the velocity.
+  for (const bool sideways : {true, false}) {
+    for (const double lateral : {0.12, 0.20}) {
+      TrackerParams p;
+      p.leg_spread_lateral_sigma = lateral;
+      PeopleTracker tracker(p);
+      const DetectorParams dp;
+      for (int k = 0; k <= 10; ++k) tracker.updateLegs(0.1 * k, legsAt({0.1 * k, 0.0}), Pose2{}, dp);
+      ASSERT_EQ(tracker.confirmedTracks().size(), 1u);
+      const Eigen::Vector2d pred(1.1, 0.0);
+      const Eigen::Vector2d leg = pred + (sideways ? Eigen::Vector2d(0.0, 0.6) : Eigen::Vector2d(0.6, 0.0));
+      tracker.updateLegs(1.1, {{leg, 0.9, 0.12}}, Pose2{}, dp);
+      const Track& t = tracker.confirmedTracks().at(0);
+      const bool took = t.last_update == 1.1;
+      EXPECT_EQ(took, !sideways || lateral >= 0.2) << "sideways " << sideways << " lateral " << lateral;
+    }
+  }
+}
+
+TEST(Tracker, RecentlyDeletedTrackIsReidentified) {
+  // Detections stop for 2.2 s (longer than delete_timeout 1.5 s, no scan to tell occlusion), then resume where
+  // the person walked on: with re-identification the new track gets the old id, without it a new one.
+  for (const double window : {3.0, 0.0}) {
+    TrackerParams p;
+    p.reid_window = window;
+    PeopleTracker tracker(p);
+    const Eigen::Vector2d v(0.8, 0.2);
+    auto at = [&](double t) -> Eigen::Vector2d { return Eigen::Vector2d(1.0, -1.0) + v * t; };
+    for (int k = 0; k <= 10; ++k) tracker.updateInFrame(0.1 * k, {det(at(0.1 * k))});
+    const int id = tracker.confirmedTracks().at(0).id;
+    for (int k = 11; k < 33; ++k) tracker.updateInFrame(0.1 * k, {});
+    EXPECT_TRUE(tracker.tracks().empty());
+    for (int k = 33; k <= 36; ++k) tracker.updateInFrame(0.1 * k, {det(at(0.1 * k))});
+    ASSERT_EQ(tracker.confirmedTracks().size(), 1u);
+    if (window > 0) EXPECT_EQ(tracker.confirmedTracks()[0].id, id);
+    else EXPECT_NE(tracker.confirmedTracks()[0].id, id);
+  }
+  // Far from the deleted track's prediction: no re-identification.
+  PeopleTracker tracker;
+  for (int k = 0; k <= 10; ++k) tracker.updateInFrame(0.1 * k, {det({1.0, 0.0})});
+  const int id = tracker.confirmedTracks().at(0).id;
+  for (int k = 11; k < 30; ++k) tracker.updateInFrame(0.1 * k, {});
+  for (int k = 30; k <= 33; ++k) tracker.updateInFrame(0.1 * k, {det({5.0, 3.0})});
+  ASSERT_EQ(tracker.confirmedTracks().size(), 1u);
+  EXPECT_NE(tracker.confirmedTracks()[0].id, id);
+}
+
+TEST(Tracker, FreeSpaceHidesAndDeletesOccludedTracksCoast) {
+  const DetectorParams dp;
+  const Eigen::Vector2d person(3.0, 0.0);
+  auto discsOf = [&](const Eigen::Vector2d& c) {
+    std::vector<std::pair<Eigen::Vector2d, double>> d;
+    for (const auto& l : legsAt(c)) d.push_back({l.position, 0.06});
+    return d;
+  };
+  // Vanished: the beams pass through the track's position -> hidden at once, deleted after two scans.
+  {
+    PeopleTracker tracker;
+    for (int k = 0; k <= 5; ++k) tracker.updateLegs(0.1 * k, legsAt(person), Pose2{}, dp, nullptr);
+    ASSERT_EQ(tracker.outputTracks().size(), 1u);
+    tracker.updateLegs(0.6, {}, Pose2{}, dp, nullptr);
+    EXPECT_EQ(tracker.outputTracks().size(), 1u);  // without a scan: coasting is published
+    const LaserScan empty = scanOf(0.7, {});
+    tracker.updateLegs(0.7, {}, Pose2{}, dp, &empty);
+    ASSERT_EQ(tracker.tracks().size(), 1u);
+    EXPECT_EQ(tracker.tracks()[0].visibility, Visibility::kFreeSpace);
+    EXPECT_TRUE(tracker.outputTracks().empty());
+    const LaserScan empty2 = scanOf(0.8, {});
+    tracker.updateLegs(0.8, {}, Pose2{}, dp, &empty2);
+    EXPECT_TRUE(tracker.tracks().empty());
+  }
+  // Occluded: someone stands between sensor and person for 2.5 s; the track is published for
+  // occluded_coast_time, survives delete_timeout, and keeps its id when the person reappears.
+  {
+    PeopleTracker tracker;
+    for (int k = 0; k <= 5; ++k) {
+      const LaserScan s = scanOf(0.1 * k, discsOf(person));
+      tracker.updateLegs(0.1 * k, legsAt(person), Pose2{}, dp, &s);
+    }
+    const int id = tracker.outputTracks().at(0).id;
+    for (int k = 6; k <= 30; ++k) {
+      auto d = discsOf(person);
+      d.push_back({{1.5, 0.0}, 0.25});
+      const LaserScan s = scanOf(0.1 * k, d);
+      tracker.updateLegs(0.1 * k, {}, Pose2{}, dp, &s);
+      ASSERT_EQ(tracker.tracks().size(), 1u) << k;
+      EXPECT_EQ(tracker.tracks()[0].visibility, Visibility::kOccluded);
+      const double coast = 0.1 * k - 0.5;
+      EXPECT_EQ(tracker.outputTracks().size(), coast <= tracker.params().occluded_coast_time + 1e-9 ? 1u : 0u) << k;
+    }
+    const LaserScan s = scanOf(3.1, discsOf(person));
+    tracker.updateLegs(3.1, legsAt(person), Pose2{}, dp, &s);
+    ASSERT_EQ(tracker.outputTracks().size(), 1u);
+    EXPECT_EQ(tracker.outputTracks()[0].id, id);
+  }
+}

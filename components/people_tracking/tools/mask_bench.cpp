@@ -148,7 +148,7 @@ int run(const MaskBenchParams& p) {
     const Pose2 base{o.x, o.y, o.theta};
     const Eigen::Vector2d lp = base.transform({mount.x, mount.y});
     const Pose2 sensor{lp.x(), lp.y(), o.theta + mount.theta};
-    tracker.updateLegs(scan.stamp, detector.detectLegs(ls), sensor, detector.params());
+    tracker.updateLegs(scan.stamp, detector.detectLegs(ls), sensor, detector.params(), &ls);
     const std::vector<Track> tracks = tracker.outputTracks();
     if (guider.state() == GuideState::kSearch) guider.selectClosestInFront(tracks, sensor, scan.stamp);
     const GuideStatus st = guider.update(tracks, sensor, scan.stamp);

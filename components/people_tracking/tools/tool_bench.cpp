@@ -44,6 +44,15 @@ int runBenchVerb(int argc, char** argv) {
       p.track_aware_pairing = v == "tracks";
     }
     else if (a == "--leg-spread") p.tracker.leg_spread_sigma = number(value());
+    else if (a == "--leg-spread-lateral") p.tracker.leg_spread_lateral_sigma = number(value());
+    else if (a == "--leg-gate") p.tracker.leg_gate_chi2 = number(value());
+    else if (a == "--reid-window") p.tracker.reid_window = number(value());
+    else if (a == "--publish-coast") p.tracker.publish_coast_time = number(value());
+    else if (a == "--occluded-coast") p.tracker.occluded_coast_time = number(value());
+    else if (a == "--occluded-delete-timeout") p.tracker.occluded_delete_timeout = number(value());
+    else if (a == "--free-space-delete") p.tracker.free_space_delete_scans = static_cast<int>(number(value()));
+    else if (a == "--visibility-radius") p.tracker.visibility_radius = number(value());
+    else if (a == "--min-init-distance") p.tracker.min_init_distance = number(value());
     else if (a == "--pair-distance") p.detector.max_leg_pair_distance = number(value());
     else throw InputError("unknown bench option '" + a + "'");
   }

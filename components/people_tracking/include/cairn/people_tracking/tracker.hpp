@@ -43,7 +43,26 @@ struct TrackerParams {
   // are paired closest-first into new person hypotheses.
   double leg_spread_sigma = 0.20;  // m, std of a leg centre around the body centre (hip offset + stride)
   double leg_gate_chi2 = 9.21;     // 99 % gate, 2 dof
+  // Legs swing along the walking direction but stay at the hip width across it: for a track moving faster than
+  // leg_spread_min_speed the spread is leg_spread_sigma along the velocity and leg_spread_lateral_sigma across it,
+  // so a coasting track does not reach sideways into the legs of someone walking next to it.
+  double leg_spread_lateral_sigma = 0.12;  // m
+  double leg_spread_min_speed = 0.3;       // m/s
+  // Re-identification: a confirmed track deleted less than reid_window ago gives its id to a new track when it
+  // is confirmed within reid_gate_chi2 of the deleted track's prediction (constant velocity, process noise).
+  double reid_window = 3.0;     // s, 0 disables
+  double reid_gate_chi2 = 9.21;
+  // Occlusion-aware coasting (updateLegs with a scan): the beams towards a track that got no leg tell whether
+  // its person is hidden behind a nearer return (occluded), or whether the beams pass through the spot (free
+  // space: the person is not there), or hit something there that was not classified as a leg (missed).
+  double visibility_radius = 0.3;       // m, beams within this radius around the predicted position are checked
+  double occluded_coast_time = 1.0;     // s, outputTracks() keeps occluded confirmed tracks this long
+  double occluded_delete_timeout = 3.0; // s, deletion of a track that has been occluded since its last update
+  int free_space_delete_scans = 2;      // consecutive free-space scans delete a track
 };
+
+// Why a track got no leg in the last scan (updateLegs with a scan; kUnknown without one).
+enum class Visibility { kDetected, kUnknown, kMissed, kOccluded, kFreeSpace };
 
 struct Track {
   int id = 0;
@@ -56,6 +75,9 @@ struct Track {
   bool confirmed = false;
   double confidence = 0.0;       // [0, 1], moving average of association success
   double leg_separation = 0.0;   // m, moving average from paired-leg detections (0 if never paired)
+  Visibility visibility = Visibility::kUnknown;  // in the last scan
+  int free_space_scans = 0;      // consecutive scans whose beams passed through the track
+  bool occluded_since_update = false;  // every scan since the last update saw it occluded
 
   [[nodiscard]] Eigen::Vector2d position() const { return state.head<2>(); }
   [[nodiscard]] Eigen::Vector2d velocity() const { return state.tail<2>(); }
@@ -79,8 +101,10 @@ class PeopleTracker {
   // Leg detections (sensor frame) paired into persons with the help of the predicted tracks, so that the legs of
   // people walking side by side are not paired across them; `pairing` supplies max_leg_pair_distance,
   // sigma_pair, sigma_single and single_leg_min_confidence. Then associated as update() does.
+  // With `scan` (the scan the legs came from), tracks without legs are classified as occluded / free space /
+  // missed (Track::visibility): occluded ones coast longer, free-space ones are hidden and deleted.
   TrackerStatus updateLegs(double stamp, const std::vector<LegDetection>& legs, const Pose2& sensor_pose,
-                           const DetectorParams& pairing);
+                           const DetectorParams& pairing, const LaserScan* scan = nullptr);
 
   [[nodiscard]] const std::vector<Track>& tracks() const { return tracks_; }  // tentative and confirmed
   [[nodiscard]] std::vector<Track> confirmedTracks() const;
@@ -101,6 +125,15 @@ class PeopleTracker {
   void applyUpdate(Track& t, const PersonDetection& d);
   void initiate(const std::vector<PersonDetection>& dets, const std::vector<bool>& det_used);
   void prune();
+  Eigen::Matrix2d legSpread(const Track& t) const;
+  void reidentify(std::size_t new_track);
+  void classifyVisibility(const LaserScan& scan, const Pose2& sensor_pose);
+
+  struct Deleted {
+    Track track;     // state at its last prediction before deletion
+    double deleted;  // stamp of deletion
+  };
+  std::vector<Deleted> deleted_;  // confirmed tracks deleted within reid_window
 
   TrackerParams params_;
   std::vector<Track> tracks_;
