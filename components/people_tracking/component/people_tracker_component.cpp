@@ -146,6 +146,16 @@ class PeopleTracker : public cairn::Node {
     tp.jpda_max_events = static_cast<int>(declare_parameter<int64_t>("tracker.jpda_max_events", tp.jpda_max_events, D{"larger JPDA gating clusters fall back to GNN", 1.0, 1e7, true}));
     tp.min_detection_confidence = declare_parameter<double>("tracker.min_detection_confidence", tp.min_detection_confidence, D{"detections below are not used", 0.0, 1.0, true});
     tp.confidence_gain = declare_parameter<double>("tracker.confidence_gain", tp.confidence_gain, D{"track confidence moving-average gain", 0.0, 1.0, true});
+    tp.leg_spread_sigma = declare_parameter<double>("tracker.leg_spread_sigma", tp.leg_spread_sigma, D{"m, std of a leg around the body centre (along the walking direction)", 0.01, 2.0, true});
+    tp.leg_spread_lateral_sigma = declare_parameter<double>("tracker.leg_spread_lateral_sigma", tp.leg_spread_lateral_sigma, D{"m, leg spread across the walking direction", 0.01, 2.0, true});
+    tp.leg_spread_min_speed = declare_parameter<double>("tracker.leg_spread_min_speed", tp.leg_spread_min_speed, D{"m/s, slower tracks use an isotropic leg spread", 0.0, 10.0, true});
+    tp.leg_gate_chi2 = declare_parameter<double>("tracker.leg_gate_chi2", tp.leg_gate_chi2, D{"chi-square gate (2 dof) of a leg around a track", 0.1, 100.0, true});
+    tp.reid_window = declare_parameter<double>("tracker.reid_window", tp.reid_window, D{"s, deleted tracks can give their id to a new track this long (0: off)", 0.0, 60.0, true});
+    tp.reid_gate_chi2 = declare_parameter<double>("tracker.reid_gate_chi2", tp.reid_gate_chi2, D{"chi-square gate (2 dof) of re-identification", 0.1, 100.0, true});
+    tp.visibility_radius = declare_parameter<double>("tracker.visibility_radius", tp.visibility_radius, D{"m, beams this close to a track decide occluded / free space / missed", 0.05, 2.0, true});
+    tp.occluded_coast_time = declare_parameter<double>("tracker.occluded_coast_time", tp.occluded_coast_time, D{"s, occluded confirmed tracks are published this long", 0.0, 60.0, true});
+    tp.occluded_delete_timeout = declare_parameter<double>("tracker.occluded_delete_timeout", tp.occluded_delete_timeout, D{"s without update deletes a track occluded since its last update", 0.0, 60.0, true});
+    tp.free_space_delete_scans = static_cast<int>(declare_parameter<int64_t>("tracker.free_space_delete_scans", tp.free_space_delete_scans, D{"consecutive scans with beams through a track delete it", 1.0, 1000.0, true}));
 
     // Guide (guide.hpp; Yuan §2.2.1).
     pt::GuideParams gp;

@@ -494,9 +494,16 @@ std::string launchError(const std::string& params) {
 }  // namespace
 
 TEST(PeopleTrackerComponent, LaunchSpecValidatesItsParameters) {
+  std::string e0;
   EXPECT_EQ(launchError("{tracker.association: jpda, tracker.process_noise: 0.8, guide.auto_reacquire: false, "
-                        "segmentation.min_points: 4, mask.people: all, model_file: leg_svm_stuede5.yml}"),
+                        "segmentation.min_points: 4, mask.people: all, model_file: leg_svm_stuede5.yml, "
+                        "tracker.leg_spread_sigma: 0.25, tracker.leg_gate_chi2: 6.0, tracker.reid_window: 0.0, "
+                        "tracker.occluded_coast_time: 0.5, tracker.free_space_delete_scans: 3}"),
             "");
+  e0 = launchError("{tracker.leg_gate_chi2: 0.0}");
+  EXPECT_NE(e0.find("tracker.leg_gate_chi2"), std::string::npos) << e0;
+  e0 = launchError("{tracker.leg_spread_sigma: -0.1}");
+  EXPECT_NE(e0.find("tracker.leg_spread_sigma"), std::string::npos) << e0;
   EXPECT_EQ(launchError("{tracker.process_noise: fast}"),
             "people.yaml:5: params: /people_tracker: parameter 'tracker.process_noise' expects double, got string (\"fast\")");
   auto e = launchError("{detector.min_leg_confidence: 1.5}");
