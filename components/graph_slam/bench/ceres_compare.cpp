@@ -2,12 +2,14 @@
 // public g2o benchmarks: same residuals and Jacobians (g2o error convention), same manifolds, same starting
 // values, tolerances and thread count. Prints per dataset the final chi2 and the median wall time of both, the
 // time ratio, and cairn's result from chordal initialization. With --outliers N: the robustness experiment
-// (M3500 + N random false loop closures).
+// (M3500 + N random false loop closures; --only selects rows by kernel / GNC variant name).
 //
 //   cairn-slam-bench [--data DIR] [--runs N] [--threads T] [--max-iters N] [--only NAME] [--outliers N]
 //                    [--solver lm|gn|dogleg] [--ceres-solver lm|dogleg] [--ordering auto|amd|nd]
 //                    [--factorization auto|simplicial|supernodal] [--no-chordal]
-//                    [--profile] [--trace]
+//                    [--profile] [--trace] [--incremental]
+//
+// --incremental replays M3500 (or --only intel / city) as a SLAM front end would (see incrementalExperiment).
 //
 // This is the only translation unit of the package that includes Ceres.
 #include <ceres/ceres.h>
@@ -25,6 +27,7 @@
 #include <vector>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 
 #include "cairn/graph_slam/factors.hpp"
@@ -218,6 +221,37 @@ CeresRun solveWithCeres(gs::PoseGraph graph, const gs::OptimizerOptions& opt, bo
   return run;
 }
 
+// SE-Sync's objective (Rosen et al., IJRR 2019, Problem 1) at the graph's values:
+//   f = sum_ij kappa_ij |R_j - R_i Rz_ij|_F^2 + tau_ij |t_j - t_i - R_i tz_ij|^2
+// with the isotropic weights SE-Sync's g2o reader derives from each edge's information matrix Omega
+// (translation block Omega_t, rotation block Omega_r): 2D tau = 2 / tr(Omega_t^-1), kappa = Omega_thth;
+// 3D tau = 3 / tr(Omega_t^-1), kappa = 3 / (2 tr(Omega_r^-1)). This is not a rescaled chi2 (chi2 uses the full
+// Omega and g2o's angle / quaternion-vector rotation error), so cairn's minimizer is not SE-Sync's: f at
+// cairn's solution is an upper bound on SE-Sync's optimum f*, tight (to O(noise^4)) in the same basin.
+double seSyncObjective(const gs::PoseGraph& g) {
+  double f = 0.0;
+  const auto& v = g.variables();
+  for (const gs::Factor& e : g.factors()) {
+    if (e.kind == gs::FactorKind::kBetween2) {
+      const gs::Pose2 &a = v[e.var[0]].pose2, &b = v[e.var[1]].pose2;
+      const Eigen::Matrix2d ra = Eigen::Rotation2Dd(a.theta).toRotationMatrix();
+      const Eigen::Matrix2d rb = Eigen::Rotation2Dd(b.theta).toRotationMatrix();
+      const Eigen::Matrix2d rz = Eigen::Rotation2Dd(e.z2.theta).toRotationMatrix();
+      const double tau = 2.0 / e.information.topLeftCorner<2, 2>().inverse().trace();
+      const double kappa = e.information(2, 2);
+      f += kappa * (rb - ra * rz).squaredNorm() + tau * (b.t - a.t - ra * e.z2.t).squaredNorm();
+    } else if (e.kind == gs::FactorKind::kBetween3) {
+      const gs::Pose3 &a = v[e.var[0]].pose3, &b = v[e.var[1]].pose3;
+      const Eigen::Matrix3d ra = a.q.normalized().toRotationMatrix(), rb = b.q.normalized().toRotationMatrix();
+      const Eigen::Matrix3d rz = e.z3.q.normalized().toRotationMatrix();
+      const double tau = 3.0 / e.information.topLeftCorner<3, 3>().inverse().trace();
+      const double kappa = 3.0 / (2.0 * e.information.bottomRightCorner<3, 3>().inverse().trace());
+      f += kappa * (rb - ra * rz).squaredNorm() + tau * (b.t - a.t - ra * e.z3.t).squaredNorm();
+    }
+  }
+  return f;
+}
+
 // Process CPU time (all threads), less sensitive than wall time to other jobs on a shared machine.
 double cpuSeconds() {
   rusage u{};
@@ -261,7 +295,7 @@ double ate2d(const gs::PoseGraph& g, const std::vector<Eigen::Vector2d>& ref) {
   return std::sqrt(sum / n);
 }
 
-int outlierExperiment(const std::string& data, int count, const gs::OptimizerOptions& opt) {
+int outlierExperiment(const std::string& data, int count, const gs::OptimizerOptions& opt, const std::string& only) {
   const std::string file = data + "/vertigo/manhattan/originalDataset/g2o/manhattanOlson3500.g2o";
   const std::string gt_file = data + "/vertigo/manhattan/groundTruth/manhattanOlson3500_nodes_groundTruth.dat";
   std::vector<Eigen::Vector2d> truth;
@@ -298,21 +332,113 @@ int outlierExperiment(const std::string& data, int count, const gs::OptimizerOpt
   std::printf("outlier-free solution: ATE %.4f m vs ground truth\n", ate_clean);
   std::printf("%-14s %12s %12s %14s %10s %8s\n", "kernel", "ATE_gt[m]", "ATE/clean", "ATE_vs_clean[m]", "time[s]", "iters");
   for (const char* k : {"none", "huber:1", "cauchy:1", "gm:1", "dcs:1", "dcs:10"}) {
+    if (!only.empty() && std::string(k).find(only) == std::string::npos) continue;
     gs::PoseGraph g = corrupted;
     g.setRobustKernelAll(gs::RobustKernel::parse(k));
     const auto sum = gs::Optimizer(opt).optimize(g);
     const double ate = ate2d(g, truth);
     std::printf("%-14s %12.4f %12.4f %14.4f %10.3f %8d\n", k, ate, ate / ate_clean, ate2d(g, clean_xy), sum.time_s,
                 sum.iterations);
+    std::fflush(stdout);
   }
+  // GNC variants: surrogate x start (least-squares solution as in Yang et al., or the stored odometry guess).
+  // Rejected false closures are counted against the injected ones (factor index >= base count).
+  const std::size_t base_factors = base.factors().size();
+  for (const bool tls : {false, true}) {
+    for (const bool from_ls : {true, false}) {
+      const std::string name = std::string(tls ? "gnc-tls" : "gnc-gm") + (from_ls ? "" : "(odom)");
+      if (!only.empty() && name.find(only) == std::string::npos) continue;
+      gs::PoseGraph g = corrupted;
+      gs::Optimizer optimizer(opt);
+      gs::GncOptions go;
+      go.surrogate = tls ? gs::GncSurrogate::kTruncatedLeastSquares : gs::GncSurrogate::kGemanMcClure;
+      go.start_from_least_squares = from_ls;
+      const auto sum = gs::optimizeGnc(g, optimizer, go);
+      std::size_t false_rejected = 0;
+      for (std::size_t k = base_factors; k < sum.weights.size(); ++k) false_rejected += sum.weights[k] < 0.5;
+      const double ate = ate2d(g, truth);
+      std::printf("%-14s %12.4f %12.4f %14.4f %10.3f %8d  (%zu rejected: %zu of %d false, %zu true; %d outer)\n",
+                  name.c_str(), ate, ate / ate_clean, ate2d(g, clean_xy), sum.time_s, sum.inner_iterations,
+                  sum.rejected, false_rejected, count, sum.rejected - false_rejected, sum.outer_iterations);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
+
+// Incremental use as a SLAM front end drives it: replay a 2D data set in vertex order, appending each pose
+// (initialized by composing the previous estimate with the odometry) with its edges to earlier poses, and
+// re-optimize (warm-started, one Optimizer) whenever a loop closure arrived. Compares incremental ordering
+// (keep the elimination order, append new poses) against a fresh ordering at every structure change.
+int incrementalExperiment(const std::string& data, const std::string& only, const gs::OptimizerOptions& base_opt,
+                          int runs) {
+  const std::string rel = only.empty() || only == "M3500" ? "carlone/input_M3500_g2o.g2o"
+                          : only == "intel"                ? "vertigo/intel/originalDataset/intel.g2o"
+                                                           : "vertigo/city10000/originalDataset/city10000.g2o";
+  const gs::PoseGraph full = gs::readG2o(data + "/" + rel);
+  const auto& vars = full.variables();
+  // Edges grouped by the later endpoint (the vertex whose arrival makes them available).
+  std::vector<std::vector<std::size_t>> edges_at(vars.size());
+  for (std::size_t k = 0; k < full.factors().size(); ++k) {
+    const gs::Factor& f = full.factors()[k];
+    if (f.kind != gs::FactorKind::kBetween2) continue;
+    edges_at[std::max(f.var[0], f.var[1])].push_back(k);
+  }
+  std::printf("## incremental: %s replayed in vertex order, optimize() after every loop closure (median of %d)\n",
+              rel.c_str(), runs);
+  std::printf("%-22s %8s %12s %12s %12s %12s %10s %14s\n", "ordering", "solves", "total[s]", "structure[s]",
+              "cpu[s]", "per_solve[ms]", "reordered", "final_chi2");
+  double chi2_batch = 0.0;
   {
-    gs::PoseGraph g = corrupted;
-    gs::Optimizer optimizer(opt);
-    const auto sum = gs::optimizeGnc(g, optimizer);
-    const double ate = ate2d(g, truth);
-    std::printf("%-14s %12.4f %12.4f %14.4f %10.3f %8d  (%zu rejected, %d outer)\n", "gnc-gm", ate, ate / ate_clean,
-                ate2d(g, clean_xy), sum.time_s, sum.inner_iterations, sum.rejected, sum.outer_iterations);
+    gs::PoseGraph g = full;
+    chi2_batch = gs::Optimizer(base_opt).optimize(g).final_chi2;
   }
+  for (const bool incremental : {false, true}) {
+    std::vector<double> tot, st, cpu;
+    int solves = 0, fresh = 0;
+    double chi2 = 0.0;
+    for (int r = 0; r < runs; ++r) {
+      gs::OptimizerOptions opt = base_opt;
+      opt.incremental_ordering = incremental;
+      opt.warm_start_damping = true;
+      gs::Optimizer optimizer(opt);
+      gs::PoseGraph g;
+      double t = 0.0, ts = 0.0;
+      solves = fresh = 0;
+      const double c0 = cpuSeconds();
+      for (std::size_t v = 0; v < vars.size(); ++v) {
+        gs::Pose2 init = vars[v].pose2;
+        bool loop = false;
+        for (std::size_t k : edges_at[v]) {
+          const gs::Factor& f = full.factors()[k];
+          const std::size_t other = f.var[0] == v ? f.var[1] : f.var[0];
+          if (v > 0 && other + 1 == v && f.var[0] == other) init = gs::compose(g.pose2(vars[other].id), f.z2);
+          if (other + 1 != v) loop = true;
+        }
+        g.addPose2(vars[v].id, init);
+        for (std::size_t k : edges_at[v]) {
+          const gs::Factor& f = full.factors()[k];
+          g.addBetween2(vars[f.var[0]].id, vars[f.var[1]].id, f.z2, f.information.topLeftCorner<3, 3>());
+        }
+        if (loop || v + 1 == vars.size()) {
+          const gs::OptimizerSummary s = optimizer.optimize(g);
+          t += s.time_s;
+          ts += s.time_structure_s;
+          ++solves;
+          fresh += s.structure_rebuilt && !s.ordering_reused;
+        }
+      }
+      cpu.push_back(cpuSeconds() - c0);
+      tot.push_back(t);
+      st.push_back(ts);
+      chi2 = g.chi2();
+    }
+    std::printf("%-22s %8d %12.4f %12.4f %12.4f %12.3f %10d %14.9g\n",
+                incremental ? "incremental (append)" : "fresh AMD every time", solves, median(tot), median(st),
+                median(cpu), 1e3 * median(tot) / solves, fresh, chi2);
+    std::fflush(stdout);
+  }
+  std::printf("batch optimize of the full graph: final chi2 %.9g\n", chi2_batch);
   return 0;
 }
 
@@ -327,6 +453,7 @@ int main(int argc, char** argv) {
   bool ceres_dogleg = false;
   bool chordal = true;
   bool profile = false;
+  bool incremental = false;
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
     auto next = [&]() -> std::string {
@@ -354,6 +481,8 @@ int main(int argc, char** argv) {
       ceres_dogleg = next() == "dogleg";
     } else if (a == "--trace") {
       opt.trace = true;
+    } else if (a == "--incremental") {
+      incremental = true;
     } else if (a == "--profile") {
       profile = true;
     } else if (a == "--no-chordal") {
@@ -371,11 +500,12 @@ int main(int argc, char** argv) {
                    "usage: cairn-slam-bench [--data DIR] [--runs N] [--threads T] [--max-iters N] [--only NAME]\n"
                    "         [--outliers N] [--solver lm|gn|dogleg] [--ceres-solver lm|dogleg]\n"
                    "         [--ordering auto|amd|nd] [--factorization auto|simplicial|supernodal] [--no-chordal]\n"
-                   "         [--profile] [--trace]\n");
+                   "         [--profile] [--trace] [--incremental]\n");
       return 2;
     }
   }
-  if (outliers > 0) return outlierExperiment(data, outliers, opt);
+  if (outliers > 0) return outlierExperiment(data, outliers, opt, only);
+  if (incremental) return incrementalExperiment(data, only, opt, runs);
 
   const std::vector<Dataset> sets = {
       {"INTEL(carlone)", "carlone/input_INTEL_g2o.g2o"},
@@ -415,6 +545,7 @@ int main(int argc, char** argv) {
     }
     std::vector<double> tc, tr, tch, cc, crr;
     gs::OptimizerSummary cs, chs;
+    double sesync_guess = 0.0, sesync_chordal = 0.0;
     CeresRun cr;
     for (int r = 0; r < runs; ++r) {
       gs::PoseGraph g = graph;
@@ -422,6 +553,7 @@ int main(int argc, char** argv) {
       double c0 = cpuSeconds();
       cs = optimizer.optimize(g);
       cc.push_back(cpuSeconds() - c0);
+      sesync_guess = seSyncObjective(g);
       tc.push_back(cs.time_s);
       c0 = cpuSeconds();
       cr = solveWithCeres(graph, opt, ceres_dogleg);
@@ -433,6 +565,7 @@ int main(int argc, char** argv) {
         gs::initializeChordal(h);
         chs = gs::Optimizer(opt).optimize(h);
         tch.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        sesync_chordal = seSyncObjective(h);
       }
     }
     const double mc = median(tc), mr = median(tr);
@@ -446,6 +579,10 @@ int main(int argc, char** argv) {
                 d.name.c_str(), graph.variables().size(), graph.factors().size(), cs.final_chi2, cr.chi2,
                 (cs.final_chi2 - cr.chi2) / cr.chi2, mc, cs.iterations, mr, cr.iterations, mc / mr, mcc, mcr,
                 mcc / mcr, chordal ? chs.final_chi2 : 0.0, chordal ? median(tch) : 0.0, notes.c_str());
+    std::printf("  SE-Sync objective f (Rosen et al. 2019 weights) at cairn's solution: from stored guess %.10g",
+                sesync_guess);
+    if (chordal) std::printf(", from chordal init %.10g", sesync_chordal);
+    std::printf("\n");
     if (profile) {
       std::printf("  cairn phases (last run) [s]: structure %.4f linearize %.4f factorize %.4f solve %.4f evaluate %.4f"
                   " other %.4f; %d factorizations, factor nnz %.0f, %.3g flop each\n",

@@ -10,7 +10,8 @@
 namespace cairn::graph_slam::detail {
 
 void BlockSystem::build(const PoseGraph& graph, std::optional<std::size_t> gauge, int ordering,
-                        int factorization, double nd_min_flops_per_block) {
+                        int factorization, double nd_min_flops_per_block, bool reuse_ordering,
+                        double reuse_fill_tolerance) {
   const auto& vars = graph.variables();
   const auto& factors = graph.factors();
   const std::size_t nv = vars.size();
@@ -47,7 +48,23 @@ void BlockSystem::build(const PoseGraph& graph, std::optional<std::size_t> gauge
   // Fill-reducing ordering on the block graph (one node per variable, so the ordering costs a fraction of a
   // scalar one); the scalar matrix is then assembled already permuted and analyzed in natural order.
   std::vector<int> perm, pos(nb);
-  if (ordering == 0) {
+  // Incremental use (variables appended since the last build, none removed or re-fixed): keep the previous
+  // elimination order and put the new blocks last, as a SLAM front end appends poses in time order. This
+  // skips the ordering (AMD / METIS) of every rebuild; the symbolic analysis in the fixed order is redone
+  // (cheap: elimination tree and counts). Guarded by the fill: if the factor grows more than
+  // reuse_fill_tolerance beyond the last full ordering's fill per block, the graph is ordered afresh.
+  bool prefix = reuse_ordering && !order_vars_.empty() && prev_ids_.size() <= nv;
+  for (std::size_t v = 0; prefix && v < prev_ids_.size(); ++v) {
+    prefix = vars[v].id == prev_ids_[v] && (block_of[v] >= 0) == (prev_active_[v] != 0);
+  }
+  ordering_reused_ = prefix;
+  if (prefix) {
+    perm.reserve(nb);
+    for (std::size_t v : order_vars_) perm.push_back(block_of[v]);
+    for (std::size_t v = prev_ids_.size(); v < nv; ++v) {
+      if (block_of[v] >= 0) perm.push_back(block_of[v]);
+    }
+  } else if (ordering == 0) {
     // Auto: AMD, plus METIS nested dissection where the factorization will dominate the run. Estimated scalar
     // flops = block-graph flops x mean(d)^3; METIS costs roughly as much as a few AMD orderings per block, so it
     // is tried only above nd_min_flops_per_block and kept if it predicts >= 5 % fewer flops. Measured: 3D
@@ -150,6 +167,22 @@ void BlockSystem::build(const PoseGraph& graph, std::optional<std::size_t> gauge
 
   chol_.setPattern(n, col_ptr, row_idx);
   if (n > 0) chol_.analyze(/*natural_ordering=*/true, factorization);
+
+  const double fill_per_block = nb > 0 ? chol_.factorNonzeros() / nb : 0.0;
+  if (ordering_reused_ && fill_per_block > (1.0 + reuse_fill_tolerance) * full_fill_per_block_) {
+    build(graph, gauge, ordering, factorization, nd_min_flops_per_block, /*reuse_ordering=*/false,
+          reuse_fill_tolerance);
+    return;
+  }
+  if (!ordering_reused_) full_fill_per_block_ = fill_per_block;
+  prev_ids_.resize(nv);
+  prev_active_.resize(nv);
+  for (std::size_t v = 0; v < nv; ++v) {
+    prev_ids_[v] = vars[v].id;
+    prev_active_[v] = block_of[v] >= 0 ? 1 : 0;
+  }
+  order_vars_.resize(nb);
+  for (int k = 0; k < nb; ++k) order_vars_[k] = var_of_block[perm[k]];
 }
 
 namespace {

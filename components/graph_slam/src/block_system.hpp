@@ -25,8 +25,13 @@ class BlockSystem {
   /// Builds pattern, block AMD ordering and symbolic factorization. gauge: a variable index treated as fixed.
   /// ordering: 0 auto (AMD; METIS nested dissection too when the predicted factorization flops exceed
   /// nd_min_flops_per_block per variable block, fewer flops wins), 1 AMD, 2 METIS nested dissection.
+  /// reuse_ordering: if the graph only gained variables since the last build, keep the last elimination order
+  /// and append the new blocks (no fill-reducing ordering); falls back to a fresh ordering when the factor's
+  /// fill per block exceeds the last fresh ordering's by more than reuse_fill_tolerance.
   void build(const PoseGraph& graph, std::optional<std::size_t> gauge, int ordering = 0, int factorization = 0,
-             double nd_min_flops_per_block = 5e4);
+             double nd_min_flops_per_block = 5e4, bool reuse_ordering = false, double reuse_fill_tolerance = 0.3);
+  /// The last build() kept the previous elimination order.
+  bool orderingReused() const { return ordering_reused_; }
 
   int size() const { return n_; }
   /// Scalar offset of variable v in the system, or -1 if it is fixed / the gauge.
@@ -51,6 +56,13 @@ class BlockSystem {
   std::vector<std::vector<double>> thread_h_;
   std::vector<Eigen::VectorXd> thread_g_;
   SparseCholesky chol_;
+  // Incremental ordering state: ids and active flags of the variables at the last build, the elimination
+  // order as variable indices, and the fill per block of the last fresh ordering.
+  std::vector<VariableId> prev_ids_;
+  std::vector<char> prev_active_;
+  std::vector<std::size_t> order_vars_;
+  double full_fill_per_block_ = 0.0;
+  bool ordering_reused_ = false;
 };
 
 }  // namespace cairn::graph_slam::detail

@@ -43,36 +43,61 @@ GncSummary optimizeGnc(PoseGraph& graph, Optimizer& optimizer, const GncOptions&
     }
     return r2;
   };
-  // Non-robust start (mu -> infinity: the surrogate is the quadratic).
-  out.last = optimizer.optimize(graph);
-  out.inner_iterations += out.last.iterations;
+  const bool tls = options.surrogate == GncSurrogate::kTruncatedLeastSquares;
+  // Non-robust start (GM: mu -> infinity, TLS: mu -> 0; both surrogates are then the quadratic).
+  if (options.start_from_least_squares) {
+    out.last = optimizer.optimize(graph);
+    out.inner_iterations += out.last.iterations;
+  }
   std::vector<double> r2 = residuals();
-  double mu = 0.0;
-  for (std::size_t s = 0; s < sel.size(); ++s) mu = std::max(mu, 2.0 * r2[s] / cbar2[s]);  // Yang et al. mu_0
+  double r2max_ratio = 0.0;
+  for (std::size_t s = 0; s < sel.size(); ++s) r2max_ratio = std::max(r2max_ratio, r2[s] / cbar2[s]);
+  // Yang et al. mu_0: GM 2 r_max^2 / c^2; TLS c^2 / (2 r_max^2 - c^2).
+  double mu = tls ? 1.0 / std::max(2.0 * r2max_ratio - 1.0, 1e-12) : std::max(1.0, 2.0 * r2max_ratio);
   std::vector<double> w(sel.size(), 1.0);
-  int at_one = 0;
+  int at_end = 0;
   const double final_tolerance = optimizer.options().function_tolerance;
   for (int outer = 0; outer < options.max_outer_iterations && !sel.empty(); ++outer) {
-    // Closed-form weight update of GNC-GM: w = (mu c^2 / (r^2 + mu c^2))^2.
     double change = 0.0;
     for (std::size_t s = 0; s < sel.size(); ++s) {
-      const double mc = mu * cbar2[s];
-      const double nw = (mc / (r2[s] + mc)) * (mc / (r2[s] + mc));
+      double nw;
+      if (tls) {
+        // GNC-TLS weight (Yang et al. eq. 14): 1 inside mu/(mu+1) c^2, 0 outside (mu+1)/mu c^2, in between
+        // c/r sqrt(mu (mu+1)) - mu.
+        const double lo = mu / (mu + 1.0) * cbar2[s], hi = (mu + 1.0) / mu * cbar2[s];
+        nw = r2[s] <= lo ? 1.0
+             : r2[s] >= hi ? 0.0
+                           : std::sqrt(cbar2[s] / r2[s]) * std::sqrt(mu * (mu + 1.0)) - mu;
+      } else {
+        // Closed-form weight update of GNC-GM: w = (mu c^2 / (r^2 + mu c^2))^2.
+        const double mc = mu * cbar2[s];
+        nw = (mc / (r2[s] + mc)) * (mc / (r2[s] + mc));
+      }
       change = std::max(change, std::abs(nw - w[s]));
       w[s] = nw;
       graph.setFactorWeight(sel[s], nw);
     }
+    // Intermediate surrogates are solved loosely; the final ones with the optimizer's own tolerance.
+    const bool at_target = tls ? false : mu <= 1.0;
     optimizer.options().function_tolerance =
-        mu > 1.0 ? std::max(final_tolerance, options.inner_function_tolerance) : final_tolerance;
+        at_target ? final_tolerance : std::max(final_tolerance, options.inner_function_tolerance);
     out.last = optimizer.optimize(graph);
     out.inner_iterations += out.last.iterations;
     ++out.outer_iterations;
     r2 = residuals();
-    if (mu <= 1.0) {
-      // At the original Geman-McClure cost: stop once the weights settled (or after a few rounds).
-      if (change < 1e-4 || ++at_one >= 5) break;
+    if (tls) {
+      // Converged once every weight is (numerically) binary and stopped changing.
+      bool binary = true;
+      for (double x : w) binary = binary && (x < 1e-6 || x > 1.0 - 1e-6);
+      if (binary && change < 1e-4) break;
+      mu *= options.mu_step;
+    } else {
+      if (at_target) {
+        // At the original Geman-McClure cost: stop once the weights settled (or after a few rounds).
+        if (change < 1e-4 || ++at_end >= 5) break;
+      }
+      mu = std::max(1.0, mu / options.mu_step);
     }
-    mu = std::max(1.0, mu / options.mu_step);
   }
   optimizer.options().function_tolerance = final_tolerance;
   out.weights.assign(factors.size(), 1.0);

@@ -48,7 +48,7 @@ struct Optimizer::Impl {
     gauge = automaticGauge(graph);
     const int before = system.cholesky().symbolicAnalyses();
     system.build(graph, gauge, static_cast<int>(o.ordering), static_cast<int>(o.factorization),
-                 o.nd_min_flops_per_block);
+                 o.nd_min_flops_per_block, o.incremental_ordering, o.incremental_fill_tolerance);
     symbolic_total += system.cholesky().symbolicAnalyses() - before;
     built_version = graph.structureVersion();
     built = true;
@@ -103,6 +103,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   sum.factors = graph.factors().size();
   sum.structure_rebuilt = timed(sum.time_structure_s, [&] { return im.ensureStructure(graph, options_); });
   if (im.gauge) sum.gauge = graph.variables()[*im.gauge].id;
+  sum.ordering_reused = sum.structure_rebuilt && im.system.orderingReused();
 
   detail::BlockSystem& sys = im.system;
   const int threads = std::max(1, options_.num_threads);

@@ -333,7 +333,9 @@ TEST(Optimizer, IncrementalReoptimizationEqualsBatchAndReusesSymbolicAnalysis) {
   gs::PoseGraph inc;
   gs::OptimizerOptions o;
   o.warm_start_damping = true;
+  o.incremental_ordering = true;
   gs::Optimizer opt(o);
+  int reused = 0, rebuilds = 0;
   inc.addPose2(0, full.pose2(0));
   for (const auto& f : full.factors()) {
     const auto i = full.variables()[f.var[0]].id, j = full.variables()[f.var[1]].id;
@@ -343,8 +345,14 @@ TEST(Optimizer, IncrementalReoptimizationEqualsBatchAndReusesSymbolicAnalysis) {
       const auto sum = opt.optimize(inc);
       EXPECT_TRUE(sum.structure_rebuilt);
       EXPECT_TRUE(sum.converged);
+      reused += sum.ordering_reused;
+      ++rebuilds;
     }
   }
+  // Poses were only appended: after the first solve the elimination order is kept (new poses last) unless
+  // the fill guard asked for a fresh ordering.
+  EXPECT_GE(reused, 1);
+  EXPECT_LT(reused, rebuilds);
   const auto final_sum = opt.optimize(inc);
   const int analyses = final_sum.symbolic_analyses;
   // Only values changed since: re-optimizing (even from perturbed values) reuses the symbolic factorization.
@@ -360,6 +368,61 @@ TEST(Optimizer, IncrementalReoptimizationEqualsBatchAndReusesSymbolicAnalysis) {
   for (const auto& v : batch.variables()) {
     EXPECT_LT((inc.pose2(v.id).t - v.pose2.t).norm(), 1e-6);
     EXPECT_NEAR(inc.pose2(v.id).theta, v.pose2.theta, 1e-6);
+  }
+}
+
+TEST(Optimizer, IncrementalOrderingFallsBackToFreshOrderingWhenFillGrows) {
+  const Synthetic2d s = makeLoop2d(2, 5);
+  const gs::PoseGraph full = buildGraph2d(s, 0.03, 5, false);
+  for (const double tolerance : {-1.0, 1e9}) {
+    gs::OptimizerOptions o;
+    o.incremental_ordering = true;
+    o.incremental_fill_tolerance = tolerance;  // -1: every reuse exceeds it; 1e9: never
+    gs::Optimizer opt(o);
+    gs::PoseGraph inc;
+    inc.addPose2(0, full.pose2(0));
+    int reused = 0;
+    for (const auto& f : full.factors()) {
+      const auto i = full.variables()[f.var[0]].id, j = full.variables()[f.var[1]].id;
+      if (!inc.hasVariable(j)) inc.addPose2(j, gs::compose(inc.pose2(i), f.z2));
+      inc.addBetween2(i, j, f.z2, f.information.topLeftCorner<3, 3>());
+      if (j != i + 1) reused += opt.optimize(inc).ordering_reused;
+    }
+    gs::PoseGraph batch = full;
+    gs::Optimizer().optimize(batch);
+    EXPECT_NEAR(opt.optimize(inc).final_chi2, batch.chi2(), 1e-8 * batch.chi2());
+    if (tolerance < 0.0) {
+      EXPECT_EQ(reused, 0);
+    } else {
+      EXPECT_GT(reused, 0);
+    }
+  }
+}
+
+// Factorization reuse (chord steps), step extension, the dogleg look-ahead and the automatic nested
+// dissection ordering change the path, not the minimum: same chi2 as the plain algorithms.
+TEST(Optimizer, AccelerationsReachTheSameMinimum) {
+  const gs::PoseGraph g3 = buildGraph3d(60, 0.05, 23, nullptr);
+  for (const auto alg : {gs::Algorithm::kLevenbergMarquardt, gs::Algorithm::kDogleg}) {
+    gs::OptimizerOptions plain;
+    plain.algorithm = alg;
+    plain.factor_reuse = 0;
+    plain.step_extension = 0;
+    plain.dogleg_lookahead = 0;
+    plain.ordering = gs::Ordering::kAmd;
+    gs::OptimizerOptions fast;
+    fast.algorithm = alg;
+    fast.factor_reuse_min_gain = 0.0;   // reuse even where a factorization is cheap (small test graph)
+    fast.nd_min_flops_per_block = 0.0;  // always try nested dissection
+    gs::PoseGraph a = g3, b = g3;
+    const auto sa = gs::Optimizer(plain).optimize(a);
+    const auto sb = gs::Optimizer(fast).optimize(b);
+    EXPECT_TRUE(sa.converged) << sa.termination;
+    EXPECT_TRUE(sb.converged) << sb.termination;
+    EXPECT_EQ(sa.reused_factorizations, 0);
+    EXPECT_GT(sb.reused_factorizations, 0);
+    EXPECT_NEAR(sb.final_chi2, sa.final_chi2, 1e-7 * sa.final_chi2);
+    EXPECT_LT(sb.numeric_factorizations, sb.iterations + 1);
   }
 }
 

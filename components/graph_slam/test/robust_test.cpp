@@ -76,4 +76,19 @@ TEST(Robust, IntelWithFalseLoopClosures) {
   EXPECT_LT(dropped_inliers, 20u);
   // GNC re-weights only: all its inner optimizations share one symbolic analysis.
   EXPECT_EQ(gsum.last.symbolic_analyses, 1);
+
+  // The truncated-least-squares surrogate (mu increasing until the weights are binary) does the same here.
+  gs::PoseGraph tls = bad;
+  gs::Optimizer opt_tls;
+  gs::GncOptions go;
+  go.surrogate = gs::GncSurrogate::kTruncatedLeastSquares;
+  const auto tsum = gs::optimizeGnc(tls, opt_tls, go);
+  EXPECT_LT(rmsDiff(tls, clean), 0.01) << "plain " << plain_err;
+  kept_outliers = dropped_inliers = 0;
+  for (std::size_t k = 0; k < tsum.weights.size(); ++k) {
+    if (k >= first_outlier && tsum.weights[k] >= 0.5) ++kept_outliers;
+    if (k < first_outlier && tsum.weights[k] < 0.5) ++dropped_inliers;
+  }
+  EXPECT_EQ(kept_outliers, 0u);
+  EXPECT_LT(dropped_inliers, 20u);
 }

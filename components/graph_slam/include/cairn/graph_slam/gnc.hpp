@@ -11,10 +11,18 @@
 
 namespace cairn::graph_slam {
 
+/// GNC surrogate (Yang et al. 2020 §IV): Geman-McClure (mu decreases from a large value to 1) or truncated
+/// least squares (mu increases from a small value until the weights are binary).
+enum class GncSurrogate { kGemanMcClure, kTruncatedLeastSquares };
+
 struct GncOptions {
+  GncSurrogate surrogate = GncSurrogate::kGemanMcClure;
+  /// true: the continuation starts from the least-squares solution (Yang et al.); false: from the graph's
+  /// current values (e.g. odometry or chordal initialization), mu_0 computed from their residuals.
+  bool start_from_least_squares = true;
   /// Inlier threshold c^2 on e^T Omega e; <= 0 picks the 99% chi-square quantile of the factor's dimension.
   double inlier_threshold = 0.0;
-  /// mu is divided by this factor every outer iteration (Yang et al. use 1.4).
+  /// mu is divided (GM) / multiplied (TLS) by this factor every outer iteration (Yang et al. use 1.4).
   double mu_step = 1.4;
   int max_outer_iterations = 100;
   /// true: only relative-pose factors between non-consecutive ids (loop closures) are re-weighted;

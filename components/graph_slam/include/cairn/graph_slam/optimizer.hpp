@@ -71,6 +71,14 @@ struct OptimizerOptions {
   /// Reuse only where a fresh step costs at least this many times a reused one (flop proxy: CHOLMOD's
   /// factorization flops vs solves + linearization); skips small graphs where factorizing is cheap.
   double factor_reuse_min_gain = 4.0;
+  /// Incremental use: when the graph only gained variables / factors since the last optimize() (same ids in
+  /// the same order, no variable re-fixed), keep the previous elimination order and append the new variables
+  /// instead of re-running the fill-reducing ordering; a fresh ordering is computed when the factor's fill per
+  /// variable grows beyond incremental_fill_tolerance over the last fresh ordering's. Off by default: on the
+  /// M3500 replay (`cairn-slam-bench --incremental`) it cut the structure time by a third but the extra fill
+  /// made the factorizations cost more than that (README "Incremental use").
+  bool incremental_ordering = false;
+  double incremental_fill_tolerance = 0.3;
   /// Print one line per iteration (cost, step, damping / radius) to stderr.
   bool trace = false;
 };
@@ -97,6 +105,7 @@ struct OptimizerSummary {
   double time_solve_s = 0.0;
   double time_evaluate_s = 0.0;
   bool structure_rebuilt = false;      ///< this call rebuilt pattern + symbolic analysis
+  bool ordering_reused = false;        ///< ... keeping the previous elimination order (incremental_ordering)
   int symbolic_analyses = 0;           ///< cumulative over the optimizer's life
   int numeric_factorizations = 0;      ///< cumulative over the optimizer's life
   double factor_nonzeros = 0.0;        ///< nonzeros of the Cholesky factor (fill-in diagnostic)
