@@ -1,5 +1,5 @@
-// cairn_copa::CopaMapNode — the runtime adapter of the CoPA-Map core (Stüde 2024, Ch. 4): robot odometry and
-// people tracks in; the online gridifier (§4.2.2, eqs. 4.5-4.6) turns them into (x1, x2, t, y, Δ) cells;
+// cairn_copa::CopaMapNode — the runtime adapter of the CoPA-Map core (Stüde 2024, Ch. 4): the robot pose (TF
+// map_frame <- base_frame, or an odometry topic as fallback) and people tracks in; the online gridifier (§4.2.2, eqs. 4.5-4.6) turns them into (x1, x2, t, y, Δ) cells;
 // retraining (Algorithm 4.1 + §4.2.5) runs on a background thread and swaps the new model in when it finishes;
 // rate queries (eq. 4.19) and expected counts ((1/(r_s² τ)) ∫ m_y, §4.2.5) are served from the current model,
 // and a rate map (mean and std) is published as nav_msgs/OccupancyGrid. Thin: conversions, parameters, threads.
@@ -22,6 +22,7 @@
 
 #include "../tools/image_io.hpp"
 #include "cairn/component.hpp"
+#include "cairn/tf.hpp"
 #include "cairn/copa_map/copa_map.hpp"
 #include "cairn/copa_map/gridifier.hpp"
 #include "cairn/copa_map/io.hpp"
@@ -63,7 +64,16 @@ class CopaMapNode : public cairn::Node {
         "model_file", "", D{"CoPA-Map model (cairn copa train) served from the start; empty: none until the first retraining", {}, {}, true});
     const std::string map_file = declare_parameter<std::string>(
         "map_file", "", D{"map_server YAML: occupancy for the FOV ray casting (§4.2.2) and the default grid extent; empty: the first message on `map`", {}, {}, true});
-    frame_id_ = declare_parameter<std::string>("frame_id", "", D{"frame of model, odometry and tracks; messages in another frame are ignored; empty: not checked", {}, {}, true});
+    frame_id_ = declare_parameter<std::string>("frame_id", "", D{"frame of model, odometry and tracks; messages in another frame are ignored; empty: map_frame with pose_source tf, not checked with odom", {}, {}, true});
+    // Robot pose (§4.2.2 needs where the robot was to know what it observed): from TF map_frame <- base_frame
+    // (default), or from an odometry topic as a fallback (e.g. a localized pose republished as Odometry).
+    pose_source_ = declare_parameter<std::string>("pose_source", "tf", D{"robot pose from 'tf' (map_frame <- base_frame) or 'odom' (topic `odom`, its frame is the model frame)", {}, {}, true});
+    if (pose_source_ != "tf" && pose_source_ != "odom")
+      throw std::invalid_argument("pose_source: '" + pose_source_ + "' is neither 'tf' nor 'odom'");
+    map_frame_ = declare_parameter<std::string>("map_frame", "map", D{"model frame when pose_source is tf (target of the TF lookup)", {}, {}, true});
+    base_frame_ = declare_parameter<std::string>("base_frame", "base_link", D{"robot frame whose origin is the FOV centre (pose_source tf)", {}, {}, true});
+    pose_period_ = declare_parameter<double>("pose_period", 0.1, D{"s (steady) between polls of the latest map_frame <- base_frame TF; poses are also looked up at every track stamp", 0.001, 60.0, true});
+    if (pose_source_ == "tf" && frame_id_.empty()) frame_id_ = map_frame_;
     // Gridifier (gridifier.hpp; Stüde §4.2.2 / §4.3).
     gc_.cell_size = declare_parameter<double>("cell_size", gc_.cell_size, D{"r_s, m (§4.3 ATC: 0.5 m)", 0.05, 50.0, true});
     gc_.time_bin = declare_parameter<double>("time_bin", gc_.time_bin, D{"τ, s (§4.3 ATC: 60 min)", 1.0, 7.0 * 86400.0, true});
@@ -130,7 +140,12 @@ class CopaMapNode : public cairn::Node {
     info_pub_ = create_publisher<cmsg::ModelInfo>("copa/model_info", cairn::QoS::latched());
     mean_pub_ = create_publisher<nav_msgs::msg::OccupancyGrid>("copa/rate_map", cairn::QoS::latched());
     std_pub_ = create_publisher<nav_msgs::msg::OccupancyGrid>("copa/rate_map_std", cairn::QoS::latched());
-    odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("odom", stream, [this](const nav_msgs::msg::Odometry& m) { onOdom(m); });
+    if (pose_source_ == "odom") {
+      odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("odom", stream, [this](const nav_msgs::msg::Odometry& m) { onOdom(m); });
+    } else {
+      tf_buffer_ = std::make_shared<cairn::TransformBuffer>(30.0);
+      tf_listener_ = std::make_unique<cairn::TransformListener>(*this, tf_buffer_);
+    }
     tracks_sub_ = create_subscription<cairn_people_msgs::msg::TrackedPersons>(
         "people/tracks", stream, [this](const cairn_people_msgs::msg::TrackedPersons& m) { onTracks(m); });
     map_sub_ = create_subscription<nav_msgs::msg::OccupancyGrid>("map", cairn::QoS::latched(), [this](const nav_msgs::msg::OccupancyGrid& m) { onMap(m); });
@@ -144,6 +159,9 @@ class CopaMapNode : public cairn::Node {
 
     flush_timer_ = create_wall_timer(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(flush_period_)),
                                      [this] { flushGrid(false); });
+    if (tf_buffer_)
+      pose_timer_ = create_wall_timer(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(pose_period_)),
+                                      [this] { poseFromTf(cairn::Time{0}, false); });
     // Publishes model info and rate maps after a model swap or a parameter change (set by other threads).
     publish_pending_ = true;
     poll_timer_ = create_wall_timer(std::chrono::milliseconds(100), [this] {
@@ -241,10 +259,33 @@ class CopaMapNode : public cairn::Node {
     }
   }
 
+  // Robot pose from TF at `stamp` (Time{0}: the latest available) into the gridifier. Poses older than the last
+  // one are skipped (the gridifier needs non-decreasing times); a missing transform is logged (rate-limited)
+  // unless `quiet` (lookups at track stamps may run ahead of the TF stream; the poll fills in).
+  void poseFromTf(cairn::Time stamp, bool quiet) {
+    if (!grid_ || !tf_buffer_) return;
+    geometry_msgs::msg::TransformStamped tf;
+    try {
+      tf = tf_buffer_->lookup_msg(map_frame_, base_frame_, stamp);
+    } catch (const cairn::TransformError& e) {
+      if (!quiet) warn("tf_missing", "no TF " + map_frame_ + " <- " + base_frame_ + ": " + e.what());
+      return;
+    }
+    const double t = toSeconds(tf.header.stamp);
+    if (!(t > last_pose_t_)) return;
+    try {
+      grid_->addPose(t, tf.transform.translation.x, tf.transform.translation.y);
+      last_pose_t_ = t;
+    } catch (const std::invalid_argument& e) {
+      warn("tf_bad", std::string("tf pose: ") + e.what() + " (t = " + std::to_string(t) + "), ignored");
+    }
+  }
+
   void onTracks(const cairn_people_msgs::msg::TrackedPersons& m) {
     if (!grid_ || !frameOk(m.header.frame_id, "people/tracks")) return;
     const double t = toSeconds(m.header.stamp);
     if (!std::isfinite(t)) return;
+    if (tf_buffer_) poseFromTf(cairn::stamp_of(m.header.stamp), true);  // where the robot was when it saw them
     if (last_sample_t_ && t >= *last_sample_t_ && t - *last_sample_t_ < detection_period_) return;
     last_sample_t_ = t;
     for (const auto& p : m.tracks) {
@@ -449,7 +490,8 @@ class CopaMapNode : public cairn::Node {
   }
 
   // Parameters and configuration.
-  std::string frame_id_;
+  std::string frame_id_, pose_source_, map_frame_, base_frame_;
+  double pose_period_ = 0.1;
   cm::GridConfig gc_;
   cm::CopaMapConfig mc_;
   cm::TrainConfig tc_;
@@ -484,7 +526,9 @@ class CopaMapNode : public cairn::Node {
   std::shared_ptr<cairn::Service<csrv::QueryRate_Request, csrv::QueryRate_Response>> query_srv_;
   std::shared_ptr<cairn::Service<csrv::ExpectedCount_Request, csrv::ExpectedCount_Response>> count_srv_;
   std::shared_ptr<cairn::Service<csrv::Retrain_Request, csrv::Retrain_Response>> retrain_srv_;
-  std::shared_ptr<cairn::TimerBase> flush_timer_, poll_timer_, retrain_timer_;
+  std::shared_ptr<cairn::TimerBase> flush_timer_, poll_timer_, retrain_timer_, pose_timer_;
+  std::shared_ptr<cairn::TransformBuffer> tf_buffer_;
+  std::unique_ptr<cairn::TransformListener> tf_listener_;
 };
 
 }  // namespace cairn_copa

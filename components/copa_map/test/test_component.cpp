@@ -3,7 +3,7 @@
 //    model_file; ~/query_rate and ~/expected_count must equal the core's predict()/expectedCount() on the same
 //    file (eq. 4.19, §4.2.5), the latched rate map must be the model's mean at rate_map.time, and bad requests
 //    get success = false while the component keeps serving;
-//  * online: odometry and people tracks over DDS are gridified (§4.2.2), ~/retrain trains in the background and
+//  * online: the robot pose from TF (or the odometry fallback) and people tracks over DDS are gridified (§4.2.2), ~/retrain trains in the background and
 //    swaps the model in (ModelInfo version 1); the cell where the person stood gets the higher rate;
 //  * launch-spec validation of the component's parameters (dry-run construction).
 #include <gtest/gtest.h>
@@ -28,6 +28,7 @@
 #include "cairn_people_msgs/msg/TrackedPersons.hpp"
 #include "nav_msgs/msg/OccupancyGrid.hpp"
 #include "nav_msgs/msg/Odometry.hpp"
+#include "tf2_msgs/msg/TFMessage.hpp"
 
 using namespace std::chrono_literals;
 namespace cm = cairn::copa_map;
@@ -40,6 +41,18 @@ builtin_interfaces::msg::Time stampOf(double s) {
   builtin_interfaces::msg::Time t;
   t.sec = static_cast<int32_t>(std::floor(s));
   t.nanosec = static_cast<uint32_t>(std::llround((s - std::floor(s)) * 1e9));
+  return t;
+}
+
+geometry_msgs::msg::TransformStamped transformOf(const std::string& parent, const std::string& child, double s,
+                                                double x, double y) {
+  geometry_msgs::msg::TransformStamped t;
+  t.header.stamp = stampOf(s);
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  t.transform.translation.x = x;
+  t.transform.translation.y = y;
+  t.transform.rotation.w = 1.0;
   return t;
 }
 
@@ -275,8 +288,12 @@ TEST(CopaMapComponent, ServesTheLoadedModelOverDdsLikeTheCore) {
   std::filesystem::remove(path);
 }
 
-TEST(CopaMapComponent, GridifiesOdometryAndTracksAndRetrainsInTheBackground) {
+namespace {
+// Robot pose from TF (map <- odom static, odom <- base_link per step) or from the `odom` topic (fallback); the
+// robot is at (2, 2) in the model frame either way.
+void gridifyAndRetrain(bool pose_from_tf) {
   cairn::LoadRequest req{"cairn_copa::CopaMapNode", "copa_map"};
+  req.parameters["pose_source"] = std::string(pose_from_tf ? "tf" : "odom");
   req.parameters["cell_size"] = 0.5;
   req.parameters["time_bin"] = 20.0;  // τ
   req.parameters["min_duration"] = 1.0;
@@ -292,8 +309,22 @@ TEST(CopaMapComponent, GridifiesOdometryAndTracksAndRetrainsInTheBackground) {
   Container container(req);
   Remote remote;
   auto odom_pub = remote.node->create_publisher<nav_msgs::msg::Odometry>("odom", cairn::QoS{}.keep_last(1000));
+  auto tf_pub = remote.node->create_publisher<tf2_msgs::msg::TFMessage>("/tf", cairn::QoS{}.keep_last(1000));
+  auto tf_static_pub = remote.node->create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", cairn::QoS::latched());
   auto tracks_pub = remote.node->create_publisher<cairn_people_msgs::msg::TrackedPersons>("people/tracks", cairn::QoS{}.keep_last(1000));
-  ASSERT_TRUE(waitFor([&] { return odom_pub->inter_process_subscription_count() > 0 && tracks_pub->inter_process_subscription_count() > 0; }, 20s));
+  if (pose_from_tf) {
+    tf2_msgs::msg::TFMessage st;
+    st.transforms.push_back(transformOf("map", "odom", 0.0, 0.5, -0.5));
+    tf_static_pub->publish(st);
+  }
+  ASSERT_TRUE(waitFor([&] {
+    const bool pose = pose_from_tf ? tf_pub->inter_process_subscription_count() > 0 &&
+                                         tf_static_pub->inter_process_subscription_count() > 0
+                                   : odom_pub->inter_process_subscription_count() > 0;
+    return pose && tracks_pub->inter_process_subscription_count() > 0;
+  }, 20s));
+  // The fallback topic is not subscribed with TF poses and vice versa.
+  EXPECT_EQ(odom_pub->inter_process_subscription_count() > 0, !pose_from_tf);
 
   // No model yet: queries are refused.
   csrv::QueryRate_Request rq;
@@ -315,7 +346,15 @@ TEST(CopaMapComponent, GridifiesOdometryAndTracksAndRetrainsInTheBackground) {
     o.pose.pose.position.x = 2.0;
     o.pose.pose.position.y = 2.0;
     if (k == 100) o.pose.pose.position.x = std::numeric_limits<double>::quiet_NaN();
-    odom_pub->publish(o);
+    if (pose_from_tf) {
+      tf2_msgs::msg::TFMessage tf;
+      tf.transforms.push_back(transformOf("odom", "base_link", k, 1.5, 2.5));
+      if (k == 100) tf.transforms.back().transform.translation.x = std::numeric_limits<double>::quiet_NaN();
+      tf_pub->publish(tf);
+      o.header.frame_id = "map";
+    } else {
+      odom_pub->publish(o);
+    }
     cairn_people_msgs::msg::TrackedPersons tp;
     tp.header = o.header;
     cairn_people_msgs::msg::TrackedPerson p;
@@ -326,7 +365,13 @@ TEST(CopaMapComponent, GridifiesOdometryAndTracksAndRetrainsInTheBackground) {
     tracks_pub->publish(tp);
     if (k == 300) {  // time going backwards: ignored
       o.header.stamp = stampOf(10);
-      odom_pub->publish(o);
+      if (pose_from_tf) {
+        tf2_msgs::msg::TFMessage tf;
+        tf.transforms.push_back(transformOf("odom", "base_link", 10, -3.0, -3.0));
+        tf_pub->publish(tf);
+      } else {
+        odom_pub->publish(o);
+      }
     }
     std::this_thread::sleep_for(1ms);  // pacing only; lost messages would not change the assertions
   }
@@ -359,6 +404,11 @@ TEST(CopaMapComponent, GridifiesOdometryAndTracksAndRetrainsInTheBackground) {
   // 20 samples per 20 s bin = 3600 per hour in the person's cell, ~0 elsewhere (eq. 4.6).
   EXPECT_GT(r->mean[0], 10.0 * r->mean[1] + 100.0) << r->mean[0] << " vs " << r->mean[1];
 }
+}  // namespace
+
+TEST(CopaMapComponent, GridifiesTfPoseAndTracksAndRetrainsInTheBackground) { gridifyAndRetrain(true); }
+
+TEST(CopaMapComponent, OdometryTopicFallbackGridifiesAndRetrains) { gridifyAndRetrain(false); }
 
 namespace {
 std::string launchError(const std::string& params) {
@@ -383,6 +433,8 @@ TEST(CopaMapComponent, LaunchSpecValidatesItsParameters) {
   EXPECT_NE(e.find("'grid.nx' and 'grid.ny' must both be 0 or both positive"), std::string::npos) << e;
   e = launchError("{map_file: /no/such/map.yaml}");
   EXPECT_NE(e.find("map_file: "), std::string::npos) << e;
+  e = launchError("{pose_source: gps}");
+  EXPECT_NE(e.find("pose_source: 'gps' is neither 'tf' nor 'odom'"), std::string::npos) << e;
   e = launchError("{train.no_such_param: 1}");
   EXPECT_NE(e.find("train.no_such_param"), std::string::npos) << e;
 
