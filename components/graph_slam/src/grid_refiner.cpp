@@ -20,7 +20,7 @@ struct Normal {
 
 // Evaluates the cost at x; with jac also the Gauss-Newton system (H = JᵀJ, g = Jᵀr).
 void evaluate(const ProbabilityGrid& g, const std::vector<Eigen::Vector2d>& pts, const Eigen::Vector3d& x,
-              const Pose2& prior, const RefineOptions& o, bool jac, Normal& n) {
+              const Pose2& prior, const RefineOptions& o, const Eigen::Matrix2d& Wt, bool jac, Normal& n) {
   n = Normal{};
   const double c = std::cos(x.z()), s = std::sin(x.z());
   const double scale2 = o.occupied_weight / static_cast<double>(pts.size());
@@ -42,13 +42,12 @@ void evaluate(const ProbabilityGrid& g, const std::vector<Eigen::Vector2d>& pts,
   n.cost = scale2 * n.scan_sq;
   const Eigen::Vector2d dt = x.head<2>() - prior.t;
   const double dth = normalizeAngle(x.z() - prior.theta);
-  const double wt2 = o.translation_weight * o.translation_weight, wr2 = o.rotation_weight * o.rotation_weight;
-  n.cost += wt2 * dt.squaredNorm() + wr2 * dth * dth;
+  const double wr2 = o.rotation_weight * o.rotation_weight;
+  n.cost += dt.dot(Wt * dt) + wr2 * dth * dth;
   if (jac) {
-    n.H(0, 0) += wt2;
-    n.H(1, 1) += wt2;
+    n.H.topLeftCorner<2, 2>() += Wt;
     n.H(2, 2) += wr2;
-    n.g.head<2>() += wt2 * dt;
+    n.g.head<2>() += Wt * dt;
     n.g.z() += wr2 * dth;
   }
 }
@@ -64,8 +63,26 @@ RefineResult refine(const ProbabilityGrid& g, const std::vector<Eigen::Vector2d>
     return res;
   }
   Eigen::Vector3d x(initial.t.x(), initial.t.y(), initial.theta);
+  // Translation prior weight matrix: w_t² I, or blended towards the degenerate weight along directions the
+  // scan's geometry does not constrain (see RefineOptions::degenerate_translation_weight).
+  const double wt2 = o.translation_weight * o.translation_weight;
+  Eigen::Matrix2d Wt = wt2 * Eigen::Matrix2d::Identity();
+  if (o.degenerate_translation_weight >= 0.0) {
+    int lines = 0;
+    const Eigen::Matrix3d info = pointToLineInformation(pts, initial, o, &lines);
+    const double wd2 = o.degenerate_translation_weight * o.degenerate_translation_weight;
+    Eigen::Matrix2d constrained = Eigen::Matrix2d::Zero();  // eigenvalues in [0, 1]: 1 = fully constrained
+    if (lines > 0) {
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(info.topLeftCorner<2, 2>() / static_cast<double>(lines));
+      // A direction counts as constrained in proportion to its share of the normals, saturating at 1/4 of them
+      // (a room's walls split the normals about evenly between two directions).
+      const Eigen::Vector2d c = (es.eigenvalues() * 4.0).cwiseMin(1.0).cwiseMax(0.0);
+      constrained = es.eigenvectors() * c.asDiagonal() * es.eigenvectors().transpose();
+    }
+    Wt = wt2 * constrained + wd2 * (Eigen::Matrix2d::Identity() - constrained);
+  }
   Normal n, trial;
-  evaluate(g, pts, x, prior, o, true, n);
+  evaluate(g, pts, x, prior, o, Wt, true, n);
   // Levenberg–Marquardt with Marquardt scaling and Nielsen's damping update (as Ceres): the Gauss–Newton
   // step overshoots on this cost (the neglected term Σ r ∇²r is positive at occupancy peaks).
   double lambda = 1e-2, nu = 2.0;
@@ -77,7 +94,7 @@ RefineResult refine(const ProbabilityGrid& g, const std::vector<Eigen::Vector2d>
     if (!step.allFinite()) break;
     Eigen::Vector3d xt = x + step;
     xt.z() = normalizeAngle(xt.z());
-    evaluate(g, pts, xt, prior, o, true, trial);
+    evaluate(g, pts, xt, prior, o, Wt, true, trial);
     const double predicted = -(2.0 * n.g.dot(step) + step.dot(n.H * step));
     const double rho = predicted > 0.0 ? (n.cost - trial.cost) / predicted : -1.0;
     const bool small = step.head<2>().norm() + std::abs(step.z()) < o.step_tolerance;
@@ -105,7 +122,8 @@ RefineResult refine(const ProbabilityGrid& g, const std::vector<Eigen::Vector2d>
   return res;
 }
 
-Eigen::Matrix3d pointToLineCovariance(const std::vector<Eigen::Vector2d>& pts, const Pose2& pose, const RefineOptions& o) {
+Eigen::Matrix3d pointToLineInformation(const std::vector<Eigen::Vector2d>& pts, const Pose2& pose, const RefineOptions& o,
+                                       int* lines) {
   // Information of a point-to-line alignment (Censi 2007 style): every point with a line-like neighbourhood
   // (neighbours within normal_radius among the normal_neighbors points before and after it in scan order)
   // constrains the pose along its surface normal n: J = nᵀ [I, dR/dθ p], Ω = Σ JᵀJ / σ².
@@ -114,6 +132,7 @@ Eigen::Matrix3d pointToLineCovariance(const std::vector<Eigen::Vector2d>& pts, c
   const int N = static_cast<int>(pts.size());
   const double r2 = o.normal_radius * o.normal_radius;
   Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
+  int count = 0;
   for (int k = 0; k < N; ++k) {
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
     int cnt = 0;
@@ -139,7 +158,14 @@ Eigen::Matrix3d pointToLineCovariance(const std::vector<Eigen::Vector2d>& pts, c
     const Eigen::Vector2d dq(-s * p.x() - c * p.y(), c * p.x() - s * p.y());
     const Eigen::Vector3d J(n.x(), n.y(), n.dot(dq));
     info.noalias() += J * J.transpose();
+    ++count;
   }
+  if (lines != nullptr) *lines = count;
+  return info;
+}
+
+Eigen::Matrix3d pointToLineCovariance(const std::vector<Eigen::Vector2d>& pts, const Pose2& pose, const RefineOptions& o) {
+  Eigen::Matrix3d info = pointToLineInformation(pts, pose, o);
   const double s2 = o.point_sigma * o.point_sigma;
   const Eigen::Vector3d max_var(o.max_sigma_translation * o.max_sigma_translation,
                                 o.max_sigma_translation * o.max_sigma_translation,

@@ -55,6 +55,8 @@ std::vector<SlamParam> makeTable() {
   t.push_back(nested("local.grid_resolution", "submap grid resolution (m)", [](SlamOptions& o) { return &o.local.grid_resolution; }, 0.005, 1));
   t.push_back(nested("local.translation_weight", "refiner: odometry prior weight on translation (1/m)",
                      [](SlamOptions& o) { return &o.local.refine.translation_weight; }, 0, 1e9));
+  t.push_back(nested("local.degenerate_translation_weight", "refiner: prior weight along directions the scan does not constrain (1/m; <0: off)",
+                     [](SlamOptions& o) { return &o.local.refine.degenerate_translation_weight; }, -1, 1e9));
   t.push_back(nested("local.rotation_weight", "refiner: odometry prior weight on rotation (1/rad)",
                      [](SlamOptions& o) { return &o.local.refine.rotation_weight; }, 0, 1e9));
   t.push_back(nested("local.hit_probability", "grid update probability of a hit", [](SlamOptions& o) { return &o.local.grid.hit_probability; }, 0.5, 1));

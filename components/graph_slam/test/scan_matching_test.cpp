@@ -282,6 +282,35 @@ TEST(GridRefiner, CovarianceIsLargerAlongAFeaturelessCorridor) {
   EXPECT_LT(rr.covariance(1, 1), 10.0 * rr.covariance(0, 0));
 }
 
+TEST(GridRefiner, DegeneracyAwarePriorHoldsTheCorridorAxisAndLetsTheScanFixTheRest) {
+  // A featureless corridor: along x only the prior can place the scan; across it the walls can. A prior that is
+  // wrong by 0.2 m along and 0.06 m across: with a weak uniform prior the result follows the walls across the corridor (good)
+  // but is free to drift along it; the degeneracy-aware prior (weak across, strong along) keeps x at the prior
+  // while still correcting y from the walls.
+  const auto walls = corridor();
+  gs::ProbabilityGrid g(0.05);
+  gs::ScanFilterOptions fo;
+  fo.max_range = 10.0;
+  for (int i = 0; i < 5; ++i) {
+    const gs::Pose2 p = pose2(-1.0 + 0.5 * i, 0.1 * (i % 2), 0.05 * i);
+    g.insert(gs::toRangeData(castScan(walls, p, 360, 0.005, 80 + i), gs::Pose2{}, fo), p);
+  }
+  const gs::Pose2 truth = pose2(0.3, 0.05, 0.1);
+  const auto pts = gs::adaptiveVoxelFilter(gs::toRangeData(castScan(walls, truth, 360, 0.01, 90), gs::Pose2{}, fo).returns, fo);
+  const gs::Pose2 prior = pose2(0.5, 0.11, 0.1);  // 0.2 m off along, 0.06 m across (inside the grid's basin)
+  gs::RefineOptions ro;
+  ro.translation_weight = 0.5;
+  ro.degenerate_translation_weight = 10.0;
+  const gs::RefineResult r = gs::refine(g, pts, prior, prior, ro);
+  EXPECT_NEAR(r.pose.t.y(), truth.t.y(), 0.02);  // across: the scan wins over the prior error
+  EXPECT_NEAR(r.pose.t.x(), prior.t.x(), 0.02);  // along: held by the strong prior
+  // The uniform strong prior (disabled degeneracy term) holds y near the wrong prior too.
+  gs::RefineOptions strong;
+  strong.translation_weight = 10.0;
+  const gs::RefineResult s = gs::refine(g, pts, prior, prior, strong);
+  EXPECT_GT(std::abs(s.pose.t.y() - truth.t.y()), std::abs(r.pose.t.y() - truth.t.y()) + 0.01);
+}
+
 TEST(BranchAndBound, SameOptimumAsExhaustiveSearch) {
   const auto walls = room();
   const gs::ProbabilityGrid g = roomGrid(walls, roomPoses());

@@ -20,6 +20,12 @@ struct RefineOptions {
   /// raw odometry; w_r = 4 gives 0.35°. A weaker w_t (3) lets scans slide along the simulated office
   /// corridor (README "Front end", bench/local_slam_bench.cpp).
   double translation_weight = 10.0;  ///< w_t, 1/m (Cartographer's default)
+  /// Degeneracy-aware translation prior (ours; < 0 disables, i.e. w_t in every direction): the prior uses w_t
+  /// along directions the scan's point-to-line geometry constrains and this (larger) weight along directions it
+  /// does not (a corridor's axis), blended by the normalized translation information (eigenvalues of the mean
+  /// n·nᵀ over line-like points). A weak w_t lets good scans override bad wheel odometry (FR079); the strong one
+  /// keeps scans from sliding along featureless corridors (ACES).
+  double degenerate_translation_weight = -1.0;
   double rotation_weight = 4.0;      ///< w_r, 1/rad
   int max_iterations = 20;
   double step_tolerance = 1e-5;      ///< stop when |Δt| + |Δθ| is below this
@@ -54,6 +60,11 @@ struct RefineResult {
 /// The grid's own gradients are not used: the sampling texture of a wall would make them look informative
 /// along it.
 Eigen::Matrix3d pointToLineCovariance(const std::vector<Eigen::Vector2d>& pts, const Pose2& pose, const RefineOptions& o);
+
+/// The point-to-line information Σ JᵀJ (σ = 1) of the points at `pose` and the number of line-like points that
+/// contributed (pointToLineCovariance() is built from it).
+Eigen::Matrix3d pointToLineInformation(const std::vector<Eigen::Vector2d>& pts, const Pose2& pose, const RefineOptions& o,
+                                       int* lines = nullptr);
 
 /// Refines `initial` (pose of the points' frame in the grid frame) towards the grid, pulled towards `prior`.
 /// With no points it returns the prior, converged = false.

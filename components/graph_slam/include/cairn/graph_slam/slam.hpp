@@ -42,7 +42,8 @@ struct SlamOptions {
   /// translation prior keeps corridors from collapsing (see README, "Tuning on ACES").
   LocalSlamOptions local = [] {
     LocalSlamOptions l;
-    l.refine.translation_weight = 3.0;
+    l.refine.translation_weight = 1.0;
+    l.refine.degenerate_translation_weight = 3.0;
     l.refine.rotation_weight = 1.0;
     return l;
   }();
