@@ -401,7 +401,9 @@ double BlockSystem::evaluate(const PoseGraph& graph, const std::vector<Variable>
 
 void BlockSystem::retract(const std::vector<Variable>& values, const Eigen::VectorXd& step,
                           std::vector<Variable>& out) const {
-  out = values;
+  // Only free variables are written; a full copy only when out is not already a same-sized state of this
+  // system (the optimizer's trial buffers are copies of one state, so their fixed variables are identical).
+  if (out.size() != values.size()) out = values;
   for (std::size_t v = 0; v < values.size(); ++v) {
     const int o = var_offset_[v];
     if (o < 0) continue;

@@ -45,7 +45,8 @@ class BlockSystem {
                    int threads, double* chi2);
   /// Objective and chi2 only.
   double evaluate(const PoseGraph& graph, const std::vector<Variable>& values, int threads, double* chi2) const;
-  /// values <- values boxplus step (fixed variables untouched).
+  /// out <- values boxplus step for the free variables. Fixed / gauge variables of out are left as they are
+  /// when out already has values' size (they must then equal values'), otherwise out is a copy of values first.
   void retract(const std::vector<Variable>& values, const Eigen::VectorXd& step, std::vector<Variable>& out) const;
 
  private:
