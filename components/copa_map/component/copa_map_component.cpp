@@ -26,6 +26,7 @@
 #include "cairn/copa_map/copa_map.hpp"
 #include "cairn/copa_map/gridifier.hpp"
 #include "cairn/copa_map/io.hpp"
+#include "cairn/msg_conversions.hpp"
 #include "cairn_copa_msgs/msg/ModelInfo.hpp"
 #include "cairn_copa_msgs/srv/ExpectedCount.hpp"
 #include "cairn_copa_msgs/srv/QueryRate.hpp"
@@ -42,15 +43,8 @@ namespace csrv = cairn_copa_msgs::srv;
 
 namespace {
 
-double toSeconds(const builtin_interfaces::msg::Time& t) { return t.sec + 1e-9 * t.nanosec; }
-
-builtin_interfaces::msg::Time toTime(double s) {
-  builtin_interfaces::msg::Time t;
-  const double sec = std::floor(s);
-  t.sec = static_cast<int32_t>(sec);
-  t.nanosec = static_cast<uint32_t>(std::min(999999999.0, std::round((s - sec) * 1e9)));
-  return t;
-}
+using cairn::time_from_seconds;
+using cairn::to_seconds;
 
 struct StopTraining {};  // thrown from the training progress callback when the node is destroyed
 
@@ -250,7 +244,7 @@ class CopaMapNode : public cairn::Node {
       return;
     }
     if (!frameOk(m.header.frame_id, "odom")) return;
-    const double t = toSeconds(m.header.stamp);
+    const double t = to_seconds(m.header.stamp);
     try {
       grid_->addPose(t, m.pose.pose.position.x, m.pose.pose.position.y);
       last_pose_t_ = t;
@@ -271,7 +265,7 @@ class CopaMapNode : public cairn::Node {
       if (!quiet) warn("tf_missing", "no TF " + map_frame_ + " <- " + base_frame_ + ": " + e.what());
       return;
     }
-    const double t = toSeconds(tf.header.stamp);
+    const double t = to_seconds(tf.header.stamp);
     if (!(t > last_pose_t_)) return;
     try {
       grid_->addPose(t, tf.transform.translation.x, tf.transform.translation.y);
@@ -283,7 +277,7 @@ class CopaMapNode : public cairn::Node {
 
   void onTracks(const cairn_people_msgs::msg::TrackedPersons& m) {
     if (!grid_ || !frameOk(m.header.frame_id, "people/tracks")) return;
-    const double t = toSeconds(m.header.stamp);
+    const double t = to_seconds(m.header.stamp);
     if (!std::isfinite(t)) return;
     if (tf_buffer_) poseFromTf(cairn::stamp_of(m.header.stamp), true);  // where the robot was when it saw them
     if (last_sample_t_ && t >= *last_sample_t_ && t - *last_sample_t_ < detection_period_) return;
@@ -437,7 +431,7 @@ class CopaMapNode : public cairn::Node {
     const auto model = currentModel(&version);
     const double now_s = now().seconds();
     auto info = std::make_unique<cmsg::ModelInfo>();
-    info->header.stamp = toTime(now_s);
+    info->header.stamp = time_from_seconds(now_s);
     info->header.frame_id = frame_id_;
     info->has_model = model != nullptr;
     info->model_version = version;
@@ -470,9 +464,9 @@ class CopaMapNode : public cairn::Node {
     const cm::RatePrediction p = model->predict(Q);
     auto grid = [&](const Eigen::VectorXd& v) {
       auto g = std::make_unique<nav_msgs::msg::OccupancyGrid>();
-      g->header.stamp = toTime(s);
+      g->header.stamp = time_from_seconds(s);
       g->header.frame_id = frame_id_.empty() ? "map" : frame_id_;
-      g->info.map_load_time = toTime(now_s);
+      g->info.map_load_time = time_from_seconds(now_s);
       g->info.resolution = static_cast<float>(gc_.cell_size);
       g->info.width = static_cast<std::uint32_t>(gc_.nx);
       g->info.height = static_cast<std::uint32_t>(gc_.ny);

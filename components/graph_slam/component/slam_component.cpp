@@ -14,6 +14,7 @@
 #include "cairn/component.hpp"
 #include "cairn/graph_slam/slam.hpp"
 #include "cairn/graph_slam/slam_params.hpp"
+#include "cairn/msg_conversions.hpp"
 #include "cairn/tf.hpp"
 #include "cairn_slam_msgs/msg/SlamGraph.hpp"
 #include "cairn_slam_msgs/srv/LoadState.hpp"
@@ -33,30 +34,14 @@ namespace ssrv = cairn_slam_msgs::srv;
 
 namespace {
 
-double toSeconds(const builtin_interfaces::msg::Time& t) { return t.sec + 1e-9 * t.nanosec; }
-
-builtin_interfaces::msg::Time toTime(double s) {
-  builtin_interfaces::msg::Time t;
-  const double sec = std::floor(s);
-  t.sec = static_cast<int32_t>(sec);
-  t.nanosec = static_cast<uint32_t>(std::min(999999999.0, std::round((s - sec) * 1e9)));
-  return t;
-}
-
-double yawOf(const geometry_msgs::msg::Quaternion& q) {
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
-}
-
-geometry_msgs::msg::Quaternion quatOf(double yaw) {
-  geometry_msgs::msg::Quaternion q;
-  q.z = std::sin(0.5 * yaw);
-  q.w = std::cos(0.5 * yaw);
-  return q;
-}
+using cairn::quaternion_from_yaw;
+using cairn::time_from_seconds;
+using cairn::to_seconds;
+using cairn::yaw_of;
 
 cairn::sim::LaserScan toCore(const sensor_msgs::msg::LaserScan& m) {
   cairn::sim::LaserScan s;
-  s.stamp = toSeconds(m.header.stamp);
+  s.stamp = to_seconds(m.header.stamp);
   s.frame_id = m.header.frame_id;
   s.angle_min = m.angle_min;
   s.angle_max = m.angle_max;
@@ -136,8 +121,8 @@ class SlamNode : public cairn::Node {
   };
 
   void onOdom(const nav_msgs::msg::Odometry& m) {
-    const double t = toSeconds(m.header.stamp);
-    const gs::Pose2 p{{m.pose.pose.position.x, m.pose.pose.position.y}, yawOf(m.pose.pose.orientation)};
+    const double t = to_seconds(m.header.stamp);
+    const gs::Pose2 p{{m.pose.pose.position.x, m.pose.pose.position.y}, yaw_of(m.pose.pose.orientation)};
     if (!std::isfinite(t) || !p.t.allFinite() || !std::isfinite(p.theta)) return;
     if (!odom_.empty() && t < odom_.back().stamp) odom_.clear();  // time jumped back (log restarted)
     odom_.push_back({t, p});
@@ -185,7 +170,7 @@ class SlamNode : public cairn::Node {
   }
 
   void onScan(const sensor_msgs::msg::LaserScan& m) {
-    const double stamp = toSeconds(m.header.stamp);
+    const double stamp = to_seconds(m.header.stamp);
     if (!resolveMount(m, stamp)) return;
     std::optional<gs::Pose2> odom;
     if (use_odom_) {
@@ -220,7 +205,7 @@ class SlamNode : public cairn::Node {
     p.header.frame_id = map_frame_;
     p.pose.pose.position.x = u.pose.t.x();
     p.pose.pose.position.y = u.pose.t.y();
-    p.pose.pose.orientation = quatOf(u.pose.theta);
+    p.pose.pose.orientation = quaternion_from_yaw(u.pose.theta);
     // 6x6 row-major (x, y, z, roll, pitch, yaw): the accumulated uncertainty since the last loop closure.
     const int idx[3] = {0, 1, 5};
     for (int r = 0; r < 3; ++r)
@@ -237,7 +222,7 @@ class SlamNode : public cairn::Node {
     t.child_frame_id = odom_frame_;
     t.transform.translation.x = m2o.t.x();
     t.transform.translation.y = m2o.t.y();
-    t.transform.rotation = quatOf(m2o.theta);
+    t.transform.rotation = quaternion_from_yaw(m2o.theta);
     tf.transforms.push_back(t);
     tf_pub_->publish(std::move(tf));
   }
@@ -321,7 +306,7 @@ class SlamNode : public cairn::Node {
     rs.time_s = s.time_s;
     rs.message = s.termination;
     if (rq.republish_map) {
-      const builtin_interfaces::msg::Time stamp = toTime(slam_->trajectory().empty() ? 0.0 : slam_->trajectory().back().stamp);
+      const builtin_interfaces::msg::Time stamp = time_from_seconds(slam_->trajectory().empty() ? 0.0 : slam_->trajectory().back().stamp);
       publishMap(stamp);
       publishGraph(stamp);
     }

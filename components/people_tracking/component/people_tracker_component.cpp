@@ -18,6 +18,7 @@
 
 #include "cairn/component.hpp"
 #include "cairn/data_files.hpp"
+#include "cairn/msg_conversions.hpp"
 #include "cairn/people_tracking/classifier.hpp"
 #include "cairn/people_tracking/detector.hpp"
 #include "cairn/people_tracking/guide.hpp"
@@ -41,21 +42,11 @@ namespace {
 
 constexpr const char* kDefaultModel = "leg_adaboost_arras14.yml";  // the model `cairn people bench` uses
 
-double toSeconds(const builtin_interfaces::msg::Time& t) { return t.sec + 1e-9 * t.nanosec; }
-
-builtin_interfaces::msg::Time toTime(double s) {
-  builtin_interfaces::msg::Time t;
-  const double sec = std::floor(s);
-  t.sec = static_cast<int32_t>(sec);
-  t.nanosec = static_cast<uint32_t>(std::min(999999999.0, std::round((s - sec) * 1e9)));
-  return t;
-}
+using cairn::time_from_seconds;
+using cairn::to_seconds;
+using cairn::yaw_of;
 
 double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
-
-double yawOf(const geometry_msgs::msg::Quaternion& q) {
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
-}
 
 // Directory of this component library (for models installed next to it: <prefix>/lib/cairn_components/x.so).
 std::filesystem::path libraryDir() {
@@ -261,7 +252,7 @@ class PeopleTracker : public cairn::Node {
   }
 
   void onOdom(const nav_msgs::msg::Odometry& m) {
-    const double t = toSeconds(m.header.stamp);
+    const double t = to_seconds(m.header.stamp);
     const auto& p = m.pose.pose;
     if (!std::isfinite(t) || !std::isfinite(p.position.x) || !std::isfinite(p.position.y)) {
       warn("odom_nan", "odom: non-finite stamp or position, ignored");
@@ -275,7 +266,7 @@ class PeopleTracker : public cairn::Node {
     if (!odom_.empty() && t == odom_.back().stamp) odom_.pop_back();
     odom_frame_ = m.header.frame_id;
     const auto& tw = m.twist.twist;
-    odom_.push_back({t, pt::Pose2{p.position.x, p.position.y, yawOf(p.orientation)},
+    odom_.push_back({t, pt::Pose2{p.position.x, p.position.y, yaw_of(p.orientation)},
                      std::isfinite(tw.linear.x) ? tw.linear.x : 0.0, std::isfinite(tw.linear.y) ? tw.linear.y : 0.0,
                      std::isfinite(tw.angular.z) ? tw.angular.z : 0.0});
     while (odom_.size() > 2 && odom_.back().stamp - odom_.front().stamp > kOdomHistory) odom_.pop_front();
@@ -321,7 +312,7 @@ class PeopleTracker : public cairn::Node {
 
   void onScan(const sensor_msgs::msg::LaserScan& m) {
     pt::LaserScan scan;
-    scan.stamp = toSeconds(m.header.stamp);
+    scan.stamp = to_seconds(m.header.stamp);
     scan.angle_min = m.angle_min;
     scan.angle_increment = m.angle_increment;
     scan.range_min = m.range_min;
@@ -417,7 +408,7 @@ class PeopleTracker : public cairn::Node {
       o.age = t.age();
       o.confidence = t.confidence;
       o.leg_separation = t.leg_separation;
-      o.stamp = toTime(t.stamp);
+      o.stamp = time_from_seconds(t.stamp);
       tmsg->tracks.push_back(o);
     }
     track_pub_->publish(std::move(tmsg));

@@ -13,29 +13,14 @@
 #include "rosgraph_msgs/msg/Clock.hpp"
 #include "sensor_msgs/msg/LaserScan.hpp"
 
+#include "cairn/msg_conversions.hpp"
+
 namespace cairn_sim::convert {
 
 /// Seconds (sim or log time, >= 0) -> builtin_interfaces/Time, rounded to the nanosecond.
-inline builtin_interfaces::msg::Time toTime(double s) {
-  builtin_interfaces::msg::Time t;
-  if (!(s > 0.0)) return t;
-  double sec = std::floor(s);
-  double ns = std::round((s - sec) * 1e9);
-  if (ns >= 1e9) {
-    sec += 1.0;
-    ns -= 1e9;
-  }
-  t.sec = static_cast<int32_t>(sec);
-  t.nanosec = static_cast<uint32_t>(ns);
-  return t;
-}
+inline builtin_interfaces::msg::Time toTime(double s) { return cairn::time_from_seconds(s); }
 
-inline geometry_msgs::msg::Quaternion yawToQuaternion(double yaw) {
-  geometry_msgs::msg::Quaternion q;
-  q.z = std::sin(0.5 * yaw);
-  q.w = std::cos(0.5 * yaw);
-  return q;
-}
+inline geometry_msgs::msg::Quaternion yawToQuaternion(double yaw) { return cairn::quaternion_from_yaw(yaw); }
 
 inline sensor_msgs::msg::LaserScan toMsg(const cairn::sim::LaserScan& s, const std::string& frame_id) {
   sensor_msgs::msg::LaserScan m;
