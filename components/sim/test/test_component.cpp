@@ -4,6 +4,9 @@
 // CARMEN playback with the log's timestamps, and load / launch-spec validation errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
+
 #include <atomic>
 #include <cmath>
 #include <filesystem>
@@ -642,6 +645,20 @@ TEST(LogPlayCli, PublishesARecordLimitOverDdsAndExits) {
   std::lock_guard l(h.mu);
   EXPECT_TRUE(h.scans == scan_stamps);
   EXPECT_TRUE(h.odoms == odom_stamps);
+}
+
+TEST(LogPlayCli, ABadLogIsOneErrorLineNamingFileAndLineAndExitCode2) {
+  const std::string bad = kRoot + "/components/sim/test/data/bad_log.clf";
+  const std::string cmd = std::string(CAIRN_LOG_EXE) + " play " + bad + " 2>&1";
+  FILE* f = ::popen(cmd.c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  std::string out;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, f) != nullptr) out += buf;
+  const int status = ::pclose(f);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_NE(out.find("bad_log.clf:3:"), std::string::npos) << out;
 }
 
 TEST(LogPlayerComponent, BadLogsAreLoadErrorsNamingFileAndLine) {

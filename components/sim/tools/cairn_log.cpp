@@ -28,6 +28,7 @@
 #include <csignal>
 
 #include "cairn/container.hpp"
+#include "cairn/logging.hpp"
 #include "cairn/parameters.hpp"
 #include "log_player.hpp"
 #endif
@@ -114,7 +115,11 @@ int publish(const std::string& path, bool skip_malformed, const PlayOptions& p) 
   req.parameters["wait_for_subscribers"] = int64_t{p.wait_subscribers};
   req.parameters["loop"] = p.loop;
   for (const auto& [k, v] : p.params) req.parameters[k] = cairn::parse_parameter_text(v);
+  // The container would log a failed load itself; the tool reports it once, as its one-line error.
+  const cairn::Severity threshold = cairn::log_threshold();
+  if (threshold < cairn::Severity::Fatal) cairn::set_log_threshold(cairn::Severity::Fatal);
   const auto loaded = mgr.load(req);
+  cairn::set_log_threshold(threshold);
   if (!loaded.ok) {
     std::cerr << "cairn: " << loaded.error << "\n";
     return 2;
