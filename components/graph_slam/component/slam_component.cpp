@@ -164,8 +164,7 @@ class SlamNode : public cairn::Node {
                                     << " s (" << e.what() << "): using laser_x/laser_y/laser_theta");
     }
     mount_known_ = true;
-    // The mount is part of the options the core was built with: rebuild it (nothing was added yet).
-    if (slam_->nodes().empty()) slam_ = std::make_unique<gs::GraphSlam>(options_);
+    slam_->setSensorInBase(options_.sensor_in_base);
     return true;
   }
 

@@ -585,6 +585,7 @@ OptimizerSummary GraphSlam::optimize() { return impl_->optimize(); }
 
 void GraphSlam::setInitialPose(const Pose2& pose) { impl_->initial_pose = pose; }
 bool GraphSlam::localized() const { return impl_->linked; }
+void GraphSlam::setSensorInBase(const Pose2& sensor_in_base) { impl_->options.sensor_in_base = sensor_in_base; }
 
 void GraphSlam::finish() {
   if (!impl_->options.localization_only) impl_->optimize();

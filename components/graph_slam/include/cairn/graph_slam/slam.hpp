@@ -209,6 +209,9 @@ class GraphSlam {
   void setInitialPose(const Pose2& pose);
   /// True once the current trajectory is placed in the map (always for a fresh map).
   bool localized() const;
+  /// Sets the laser mount (pose of the laser in the base frame) for the following scans (the component learns it
+  /// from TF after construction, possibly after a state was loaded).
+  void setSensorInBase(const Pose2& sensor_in_base);
 
   /// Pose of every scan added so far (map frame, stamps of the scans).
   std::vector<StampedPose> trajectory() const;
