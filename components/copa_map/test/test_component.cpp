@@ -17,6 +17,7 @@
 #include <random>
 #include <thread>
 
+#include "cairn/test_support.hpp"
 #include "cairn/container.hpp"
 #include "cairn/copa_map/copa_map.hpp"
 #include "cairn/copa_map/io.hpp"
@@ -56,14 +57,7 @@ geometry_msgs::msg::TransformStamped transformOf(const std::string& parent, cons
   return t;
 }
 
-bool waitFor(const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (!pred()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(2ms);
-  }
-  return true;
-}
+constexpr auto waitFor = &cairn::testing::wait_for;  // cairn/test_support.hpp
 
 // A small model on planted moving-robot data (as test_copa_map.cpp): rate bump(x) (1 + 0.8 cos(2π t / 12)) on
 // 6 x 4 cells of 1 m over 48 bins, each cell-bin seen with probability 0.5, counts Poisson (seeded).

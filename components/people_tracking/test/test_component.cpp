@@ -14,6 +14,7 @@
 #include <random>
 #include <thread>
 
+#include "cairn/test_support.hpp"
 #include "cairn/container.hpp"
 #include "cairn/launch.hpp"
 #include "cairn/people_tracking/scene.hpp"
@@ -60,30 +61,9 @@ struct Heard {
 };
 int64_t key(const builtin_interfaces::msg::Time& t) { return int64_t{t.sec} * 1000000000 + t.nanosec; }
 
-bool waitFor(const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (!pred()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(2ms);
-  }
-  return true;
-}
+constexpr auto waitFor = &cairn::testing::wait_for;  // cairn/test_support.hpp
 
-// Spins an executor on its own thread; stop() (or the destructor) cancels and joins.
-class Spinner {
- public:
-  explicit Spinner(cairn::Executor& e) : exec_(e), thread_([this] { exec_.spin(); }) {}
-  ~Spinner() { stop(); }
-  void stop() {
-    if (!thread_.joinable()) return;
-    exec_.cancel();
-    thread_.join();
-  }
-
- private:
-  cairn::Executor& exec_;
-  std::thread thread_;
-};
+using Spinner = cairn::testing::Spinner;  // cairn/test_support.hpp
 
 // Two walkers and a robot driving forward while turning slowly; world frame == odometry frame.
 struct World {

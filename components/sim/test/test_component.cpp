@@ -20,6 +20,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "cairn/test_support.hpp"
 #include "cairn/container.hpp"
 #include "cairn/launch.hpp"
 #include "cairn/process.hpp"
@@ -40,14 +41,7 @@ namespace {
 
 const std::string kRoot = CAIRN_SOURCE_ROOT;
 
-bool waitFor(const std::function<bool()>& pred, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (!pred()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(5ms);
-  }
-  return true;
-}
+constexpr auto waitFor = &cairn::testing::wait_for;  // cairn/test_support.hpp
 
 double seconds(const builtin_interfaces::msg::Time& t) { return t.sec + 1e-9 * t.nanosec; }
 int64_t nanos(const builtin_interfaces::msg::Time& t) { return int64_t{t.sec} * 1000000000 + t.nanosec; }
