@@ -56,6 +56,11 @@ Runtime (graph discovered through DDS built-in topics; non-cairn DDS participant
 
 Component tools (run as cairn-<verb>):
   slam optimize <in.g2o> ...           pose-graph optimization (components/graph_slam)
+  slam run --carmen <log> --out <dir>  offline 2D graph SLAM: poses.txt, graph.g2o, map.pgm/.yaml/.png, summary.json
+  slam eval --poses <f> [--relations <f>] [--corrected <log> --carmen <log>]
+                                       Kuemmerle et al. relations metric, corrected-log ATE (JSON with --json)
+  slam params | train-verifier | eval-verifier
+                                       SLAM parameter table; loop-closure verifier training / evaluation
   sim bench --world <name> --json      simulator speed (components/sim)
   log play <file.clf|.bz2|.gz> [--rate R] [--pace consumers] [--limit N] [--skip-malformed] [--print]
                                        CARMEN log -> scan, odom, /tf, /clock over DDS (components/sim)
