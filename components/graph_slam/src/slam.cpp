@@ -299,12 +299,22 @@ std::optional<LoopMatch> GraphSlam::Impl::matchSubmap(const LoopQuery& q, std::i
   return lm;
 }
 
+std::vector<LoopMatch> GraphSlam::Impl::matchCandidates(const LoopQuery& q, const std::vector<LoopCandidate>& ranked,
+                                                        const SearchWindow* window, double min_score, int max_tries) {
+  std::vector<LoopMatch> out;
+  std::vector<int> tried;
+  for (const LoopCandidate& c : ranked) {
+    if (static_cast<int>(tried.size()) >= max_tries) break;
+    const int si = nodes[static_cast<std::size_t>(c.node)].submap;
+    if (std::find(tried.begin(), tried.end(), si) != tried.end()) continue;
+    tried.push_back(si);
+    if (auto m = matchSubmap(q, c.node, window, min_score)) out.push_back(*m);
+  }
+  return out;
+}
+
 std::vector<LoopMatch> GraphSlam::Impl::localSearch(const LoopQuery& q, double radius, double verifier_threshold) {
-  struct Candidate {
-    std::int64_t node;
-    double score;
-  };
-  std::vector<Candidate> cands;
+  std::vector<LoopCandidate> cands;
   const double r2 = radius * radius;
   for (const SlamNode& k : nodes) {
     if (k.id == q.node || k.submap < 0 || k.submap == q.own_submap) continue;
@@ -326,29 +336,16 @@ std::vector<LoopMatch> GraphSlam::Impl::localSearch(const LoopQuery& q, double r
     }
     cands.push_back({k.id, score});
   }
-  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
-  std::vector<LoopMatch> out;
-  std::vector<int> tried;
+  std::sort(cands.begin(), cands.end(), [](const LoopCandidate& a, const LoopCandidate& b) { return a.score > b.score; });
   SearchWindow w;
   w.linear = radius;
   w.angular = options.loop_angular_window;
-  for (const Candidate& c : cands) {
-    if (static_cast<int>(tried.size()) >= options.loop_max_matches) break;
-    const int si = nodes[static_cast<std::size_t>(c.node)].submap;
-    if (std::find(tried.begin(), tried.end(), si) != tried.end()) continue;
-    tried.push_back(si);
-    if (auto m = matchSubmap(q, c.node, &w, options.loop_min_score)) out.push_back(*m);
-  }
-  return out;
+  return matchCandidates(q, cands, &w, options.loop_min_score, options.loop_max_matches);
 }
 
 std::vector<LoopMatch> GraphSlam::Impl::globalSearch(const LoopQuery& q) {
   // Whole working memory (nodes of other trajectories), screened by the verifier, matched over whole submaps.
-  struct Candidate {
-    std::int64_t node;
-    double score;
-  };
-  std::vector<Candidate> cands;
+  std::vector<LoopCandidate> cands;
   if (!verifier) {
     // No verifier: every finished submap of the other trajectories, through its middle node (expensive:
     // one whole-submap branch-and-bound each).
@@ -373,17 +370,9 @@ std::vector<LoopMatch> GraphSlam::Impl::globalSearch(const LoopQuery& q) {
     }
     cands.push_back({k.id, score});
   }
-  std::stable_sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
-  std::vector<LoopMatch> out;
-  std::vector<int> tried;
+  std::stable_sort(cands.begin(), cands.end(), [](const LoopCandidate& a, const LoopCandidate& b) { return a.score > b.score; });
   const int max_tries = verifier ? options.loop_max_matches : static_cast<int>(cands.size());
-  for (const Candidate& c : cands) {
-    if (static_cast<int>(tried.size()) >= max_tries) break;
-    const int si = nodes[static_cast<std::size_t>(c.node)].submap;
-    if (std::find(tried.begin(), tried.end(), si) != tried.end()) continue;
-    tried.push_back(si);
-    if (auto m = matchSubmap(q, c.node, nullptr, options.global_min_score)) out.push_back(*m);
-  }
+  std::vector<LoopMatch> out = matchCandidates(q, cands, nullptr, options.global_min_score, max_tries);
   stats.global_detections += out.size();
   return out;
 }

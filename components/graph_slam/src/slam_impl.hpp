@@ -39,6 +39,12 @@ struct LoopMatch {
   std::int64_t query = -1;     ///< query node (-1: localization query)
 };
 
+/// A loop-closure candidate node and its ranking score (verifier score, or −distance without a verifier).
+struct LoopCandidate {
+  std::int64_t node = 0;
+  double score = 0.0;
+};
+
 /// A geometric match attempt (for the recall measure): query node, candidate node, outcome.
 struct LoopAttempt {
   std::int64_t query = -1, target = -1;
@@ -94,6 +100,10 @@ struct GraphSlam::Impl {
   std::vector<LoopMatch> localSearch(const LoopQuery& q, double radius, double verifier_threshold);
   std::vector<LoopMatch> confirmLocal(const std::vector<LoopMatch>& fresh);
   std::vector<LoopMatch> globalSearch(const LoopQuery& q);
+  /// Matches the query against the submaps of ranked candidates, one candidate per submap, at most max_tries
+  /// submaps (window nullptr: the whole submap).
+  std::vector<LoopMatch> matchCandidates(const LoopQuery& q, const std::vector<LoopCandidate>& ranked,
+                                         const SearchWindow* window, double min_score, int max_tries);
   std::optional<LoopMatch> matchSubmap(const LoopQuery& q, std::int64_t target, const SearchWindow* window,
                                        double min_score);
   bool verifyGlobal(const std::vector<LoopMatch>& fresh, std::vector<LoopMatch>& agreeing);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 
 namespace cairn::graph_slam {
@@ -100,6 +101,18 @@ std::vector<SlamParam> makeTable() {
   return t;
 }
 
+// The whole string as a number (std::stod / std::stol), or nullopt (empty, trailing text, out of range).
+template <typename T, typename Parse>
+std::optional<T> parseWhole(const std::string& text, Parse parse) {
+  std::size_t pos = 0;
+  try {
+    const T v = parse(text, &pos);
+    if (!text.empty() && pos == text.size()) return v;
+  } catch (const std::exception&) {
+  }
+  return std::nullopt;
+}
+
 bool parseBool(const std::string& v, bool& out) {
   if (v == "true" || v == "True" || v == "1" || v == "yes") return out = true, true;
   if (v == "false" || v == "False" || v == "0" || v == "no") return out = false, true;
@@ -129,27 +142,15 @@ void setSlamParameter(SlamOptions& options, const std::string& name, const std::
                                   std::to_string(p->max) + "]");
   };
   if (auto* d = std::get_if<double*>(&ref)) {
-    std::size_t pos = 0;
-    double v = 0;
-    try {
-      v = std::stod(value, &pos);
-    } catch (const std::exception&) {
-      pos = 0;
-    }
-    if (pos != value.size() || value.empty()) throw std::invalid_argument(name + ": expected a number, got '" + value + "'");
-    range(v);
-    **d = v;
+    const auto v = parseWhole<double>(value, [](const std::string& t, std::size_t* pos) { return std::stod(t, pos); });
+    if (!v) throw std::invalid_argument(name + ": expected a number, got '" + value + "'");
+    range(*v);
+    **d = *v;
   } else if (auto* i = std::get_if<int*>(&ref)) {
-    std::size_t pos = 0;
-    long v = 0;
-    try {
-      v = std::stol(value, &pos);
-    } catch (const std::exception&) {
-      pos = 0;
-    }
-    if (pos != value.size() || value.empty()) throw std::invalid_argument(name + ": expected an integer, got '" + value + "'");
-    range(static_cast<double>(v));
-    **i = static_cast<int>(v);
+    const auto v = parseWhole<long>(value, [](const std::string& t, std::size_t* pos) { return std::stol(t, pos); });
+    if (!v) throw std::invalid_argument(name + ": expected an integer, got '" + value + "'");
+    range(static_cast<double>(*v));
+    **i = static_cast<int>(*v);
   } else if (auto* b = std::get_if<bool*>(&ref)) {
     if (!parseBool(value, **b)) throw std::invalid_argument(name + ": expected true or false, got '" + value + "'");
   } else {
