@@ -125,40 +125,109 @@ void NavigationMonitor::reset(TimePoint) {
 }
 
 // ------------------------------------------------------------------------------------------ ProcessSampler
+ProcessSampler::ProcessSampler(int pid, Options o) : pid_(pid), opts_(std::move(o)) {
+  if (opts_.clock_ticks <= 0) opts_.clock_ticks = sysconf(_SC_CLK_TCK);
+  if (opts_.page_size <= 0) opts_.page_size = sysconf(_SC_PAGESIZE);
+}
+
+void ProcessSampler::setPid(int pid) {
+  if (pid == pid_) return;
+  pid_ = pid;
+  last_cpu_s_ = -1.0;
+}
+
 ProcessSample ProcessSampler::sample(TimePoint now) {
   ProcessSample s;
-  std::ifstream stat("/proc/" + std::to_string(pid_) + "/stat");
+  if (pid_ <= 0) return s;
+  const std::string dir = opts_.proc_root + "/" + std::to_string(pid_);
+  std::ifstream stat(dir + "/stat");
   std::string line;
   if (!std::getline(stat, line)) return s;
-  // Fields after the command name (which may contain spaces) start after the last ')'.
+  // proc(5): fields after the command name (which may contain spaces and ')') start after the last ')'.
   const auto rp = line.rfind(')');
-  if (rp == std::string::npos) return s;
+  if (rp == std::string::npos || rp + 2 > line.size()) return s;
   std::istringstream ss(line.substr(rp + 2));
   std::string f;
   unsigned long long utime = 0, stime = 0;
-  for (int field = 3; field <= 15 && ss >> f; ++field) {
+  int field = 3;
+  for (; field <= 15 && ss >> f; ++field) {
     if (field == 14) utime = std::strtoull(f.c_str(), nullptr, 10);
     if (field == 15) stime = std::strtoull(f.c_str(), nullptr, 10);
   }
-  const double hz = static_cast<double>(sysconf(_SC_CLK_TCK));
-  const double cpu_s = static_cast<double>(utime + stime) / hz;
-  if (last_cpu_s_ >= 0 && now > last_t_) s.cpu_percent = 100.0 * (cpu_s - last_cpu_s_) / seconds(now - last_t_);
+  if (field <= 15) return s;  // truncated
+  std::ifstream statm(dir + "/statm");
+  unsigned long long size_pages = 0, resident_pages = 0;
+  if (!(statm >> size_pages >> resident_pages)) return s;
+  const double cpu_s = static_cast<double>(utime + stime) / static_cast<double>(opts_.clock_ticks);
+  if (last_cpu_s_ >= 0 && now > last_t_) {
+    s.cpu_percent = std::max(0.0, 100.0 * (cpu_s - last_cpu_s_) / seconds(now - last_t_));
+    s.has_cpu = true;
+  }
   last_cpu_s_ = cpu_s;
   last_t_ = now;
-  std::ifstream status("/proc/" + std::to_string(pid_) + "/status");
-  while (std::getline(status, line))
-    if (line.rfind("VmRSS:", 0) == 0) s.rss_mb = std::strtod(line.c_str() + 6, nullptr) / 1024.0;
+  s.rss_mb = static_cast<double>(resident_pages) * static_cast<double>(opts_.page_size) / (1024.0 * 1024.0);
   s.ok = true;
   return s;
 }
 
+// ------------------------------------------------------------------------------------------ ProcessMonitor
+ProcessMonitor::ProcessMonitor(ValueMonitor& cpu, ValueMonitor& ram, ProcessSampler::Options o)
+    : cpu_(cpu), ram_(ram), sampler_(0, std::move(o)) {}
+
+void ProcessMonitor::setPid(int pid) { sampler_.setPid(pid); }
+
+bool ProcessMonitor::sample(TimePoint now) {
+  const ProcessSample s = sampler_.sample(now);
+  if (!s.ok) return false;
+  ram_.update(s.rss_mb);
+  if (s.has_cpu) cpu_.update(s.cpu_percent);
+  return true;
+}
+
+// ------------------------------------------------------------------------------------------ ClockOffsetMonitor
+ClockOffsetMonitor::ClockOffsetMonitor(std::string name, std::string target, Duration warn, Duration error,
+                                       Duration window)
+    : Monitor(std::move(name), "resource", std::move(target)), window_(window) {
+  band_.warn_high = seconds(warn);
+  band_.error_high = seconds(error);
+}
+
+void ClockOffsetMonitor::onStamp(TimePoint peer_stamp, TimePoint local_receive) {
+  std::lock_guard lock(mutex_);
+  samples_.emplace_back(local_receive, local_receive - peer_stamp);
+}
+
+bool ClockOffsetMonitor::estimate(TimePoint now, double& offset_s) {
+  std::lock_guard lock(mutex_);
+  const TimePoint from = now - window_;
+  std::erase_if(samples_, [&](const auto& p) { return p.first <= from; });
+  if (samples_.empty()) return false;
+  Duration lowest = samples_.front().second;
+  for (const auto& p : samples_) lowest = std::min(lowest, p.second);  // lower envelope: offset + min latency
+  offset_s = seconds(lowest);
+  return true;
+}
+
+Report ClockOffsetMonitor::evaluate(TimePoint now) {
+  double off = 0.0;
+  if (!estimate(now, off)) return report(Level::Ok, 0.0, name() + ": no samples");
+  return report(band_.classify(std::abs(off)), off, name() + ": clock offset " + fmt(off * 1e3) + " ms");
+}
+
+void ClockOffsetMonitor::reset(TimePoint) {
+  std::lock_guard lock(mutex_);
+  samples_.clear();
+}
+
 // ------------------------------------------------------------------------------------------ MonitorSet
 Monitor& MonitorSet::add(std::unique_ptr<Monitor> m, std::set<std::string> configurations) {
+  defined_.insert(configurations.begin(), configurations.end());
   monitors_.push_back({std::move(m), std::move(configurations)});
   return *monitors_.back().monitor;
 }
 
 void MonitorSet::setRequiredComponents(const std::string& configuration, std::vector<std::string> components) {
+  defined_.insert(configuration);
   required_[configuration] = std::move(components);
 }
 
@@ -168,7 +237,58 @@ const std::vector<std::string>& MonitorSet::requiredComponents() const {
   return it == required_.end() ? none : it->second;
 }
 
-void MonitorSet::setConfiguration(const std::string& name) { config_ = name; }
+void MonitorSet::defineConfigurations(const std::vector<std::string>& entries, const std::string& param) {
+  // Parse everything first, so a bad entry leaves the set as it was.
+  std::map<std::string, std::set<std::string>> monitors_of;  // configuration -> monitor names
+  std::map<std::string, std::vector<std::string>> required;
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const std::string where = param + "[" + std::to_string(i) + "]";
+    const auto colon = entries[i].find(':');
+    std::istringstream head(entries[i].substr(0, colon == std::string::npos ? 0 : colon));
+    std::string name, extra;
+    if (colon == std::string::npos || !(head >> name) || (head >> extra))
+      throw std::invalid_argument(where + ": expected '<configuration>: <monitor or component> ...', got '" +
+                                  entries[i] + "'");
+    if (monitors_of.count(name)) throw std::invalid_argument(where + ": configuration '" + name + "' defined twice");
+    auto& mine = monitors_of[name];
+    auto& req = required[name];
+    std::istringstream items(entries[i].substr(colon + 1));
+    for (std::string item; items >> item;) {
+      std::string monitor = item;
+      if (item[0] == '/') {  // a component: its liveness monitor, and it must run
+        monitor = "alive:" + item;
+        req.push_back(item);
+      }
+      if (!find(monitor)) {
+        std::string known;
+        for (const auto& e : monitors_) known += (known.empty() ? "" : ", ") + e.monitor->name();
+        throw std::invalid_argument(where + ": unknown monitor '" + item + "' (known: " + (known.empty() ? "none" : known) + ")");
+      }
+      mine.insert(monitor);
+    }
+  }
+  for (auto& e : monitors_)
+    for (const auto& [config, names] : monitors_of)
+      if (names.count(e.monitor->name())) e.configurations.insert(config);
+  for (auto& [config, req] : required) setRequiredComponents(config, std::move(req));
+}
+
+std::set<std::string> MonitorSet::configurationNames() const { return defined_; }
+
+void MonitorSet::setConfiguration(const std::string& name) {
+  if (!defined_.empty() && !defined_.count(name)) {
+    std::string known;
+    for (const auto& d : defined_) known += (known.empty() ? "" : ", ") + d;
+    throw std::invalid_argument("unknown configuration '" + name + "' (defined: " + known + ")");
+  }
+  config_ = name;
+}
+
+bool MonitorSet::active(const Monitor& m) const {
+  for (const auto& e : monitors_)
+    if (e.monitor.get() == &m) return e.configurations.empty() || e.configurations.count(config_) > 0;
+  return false;
+}
 
 Monitor* MonitorSet::find(const std::string& name) const {
   for (auto& e : monitors_)
@@ -214,15 +334,29 @@ class UpdateMonitorsNode : public SyncActionNode {
   UpdateMonitorsNode(const NodeConfig& c, MonitorSet& m, RecoveryInterface& r)
       : SyncActionNode(c), monitors_(m), recovery_(r), level_(c.output<int>("level")),
         category_(c.output<std::string>("category")), target_(c.output<std::string>("target")),
-        message_(c.output<std::string>("message")) {}
+        message_(c.output<std::string>("message")), configuration_(c.input<std::string>("configuration")) {}
   static PortList providedPorts() {
-    return {OutputPort<int>("level", "0 ok, 1 warning, 2 error (blocking categories)"),
+    return {InputPortWithDefault<std::string>("configuration", "",
+                                              "switches the MonitorSet to this configuration when the value changes "
+                                              "(empty or unset: keep)"),
+            OutputPort<int>("level", "0 ok, 1 warning, 2 error (blocking categories)"),
             OutputPort<std::string>("category"), OutputPort<std::string>("target"),
             OutputPort<std::string>("message")};
   }
 
  protected:
   NodeStatus onTick() override {
+    // Stüde §5.3.1: configurations "may be switched autonomously or manually"; edge-triggered, so a switch made
+    // elsewhere (the component's configuration topic) is not undone by a stale blackboard value.
+    std::string want;
+    if (configuration_.get(want) && !want.empty() && want != last_requested_) {
+      last_requested_ = want;
+      try {
+        monitors_.setConfiguration(want);
+      } catch (const std::invalid_argument& e) {
+        recovery_.sendAlert(std::string("monitor configuration: ") + e.what());
+      }
+    }
     auto reports = monitors_.evaluate(scheduler().now());
     for (const auto& r : reports) {
       if (r.category != "resource") continue;
@@ -244,6 +378,8 @@ class UpdateMonitorsNode : public SyncActionNode {
   RecoveryInterface& recovery_;
   Output<int> level_;
   Output<std::string> category_, target_, message_;
+  Input<std::string> configuration_;
+  std::string last_requested_;
   std::set<std::string> alerted_;
 };
 

@@ -4,6 +4,9 @@
 
 #include <unistd.h>
 
+#include <filesystem>
+#include <fstream>
+
 #include "cairn/bt_executive/monitoring.hpp"
 #include "cairn/bt_executive/xml_loader.hpp"
 
@@ -40,10 +43,6 @@ TEST(Monitoring, BandsAndMonitors) {
   nav.onResult(true);
   EXPECT_EQ(nav.evaluate({}).level, Level::Ok);
 
-  ProcessSampler self(getpid());
-  auto s0 = self.sample(TimePoint(0s));
-  EXPECT_TRUE(s0.ok);
-  EXPECT_GT(s0.rss_mb, 0.1);
 }
 
 TEST(Monitoring, ConfigurationsSelectMonitors) {
@@ -57,6 +56,132 @@ TEST(Monitoring, ConfigurationsSelectMonitors) {
   set.setConfiguration("charging");
   EXPECT_TRUE(set.evaluate(TimePoint(10s)).empty());
   EXPECT_EQ(set.requiredComponents(), std::vector<std::string>{"dock"});
+}
+
+/// Writes /proc/<pid>/stat and statm of a fake process under `root`.
+void writeFakeProc(const std::filesystem::path& root, int pid, unsigned long long utime, unsigned long long stime,
+                   unsigned long long resident_pages) {
+  std::filesystem::create_directories(root / std::to_string(pid));
+  std::ofstream(root / std::to_string(pid) / "stat")
+      << pid << " (cairn container (x)) S 1 " << pid << " " << pid << " 0 -1 4194560 100 0 0 0 " << utime << " "
+      << stime << " 0 0 20 0 3 0 100 123456 789\n";
+  std::ofstream(root / std::to_string(pid) / "statm") << 50000 << " " << resident_pages << " 300 10 0 4000 0\n";
+}
+
+TEST(Monitoring, ProcessMonitorReadsCpuAndRssFromFakeProc) {
+  const auto root = std::filesystem::temp_directory_path() / ("cairn_fake_proc_" + std::to_string(getpid()));
+  std::filesystem::remove_all(root);
+  ValueMonitor cpu("cpu:main", "resource", "main", Band{.warn_high = 50, .error_high = 90});
+  ValueMonitor ram("ram:main", "resource", "main", Band{.warn_high = 100, .error_high = 200});
+  ProcessMonitor pm(cpu, ram, ProcessSampler::Options{root.string(), 100, 4096});
+  EXPECT_FALSE(pm.sample(TimePoint(0s)));  // no pid yet
+  pm.setPid(4242);
+  EXPECT_FALSE(pm.sample(TimePoint(0s)));  // no such process
+  writeFakeProc(root, 4242, 1000, 200, 12800);  // 12 s of CPU, 12800 pages of 4 KiB = 50 MB
+  ASSERT_TRUE(pm.sample(TimePoint(1s)));
+  EXPECT_EQ(cpu.evaluate({}).message, "no sample yet");  // CPU % needs two samples
+  EXPECT_NEAR(ram.evaluate({}).value, 50.0, 1e-9);
+  EXPECT_EQ(ram.evaluate({}).level, Level::Ok);
+  writeFakeProc(root, 4242, 1060, 210, 30000);  // +0.7 s of CPU in 1 s: 70 %; 117 MB
+  ASSERT_TRUE(pm.sample(TimePoint(2s)));
+  EXPECT_NEAR(cpu.evaluate({}).value, 70.0, 1e-9);
+  EXPECT_EQ(cpu.evaluate({}).level, Level::Warning);
+  EXPECT_EQ(ram.evaluate({}).level, Level::Warning);
+  writeFakeProc(root, 4242, 1250, 210, 60000);  // +1.9 s in 2 s: 95 %; 234 MB
+  ASSERT_TRUE(pm.sample(TimePoint(4s)));
+  EXPECT_NEAR(cpu.evaluate({}).value, 95.0, 1e-9);
+  EXPECT_EQ(cpu.evaluate({}).level, Level::Error);
+  EXPECT_EQ(ram.evaluate({}).level, Level::Error);
+  // A respawned container is a new pid: its CPU history starts over (no difference across processes).
+  writeFakeProc(root, 4343, 5, 5, 100);
+  pm.setPid(4343);
+  ASSERT_TRUE(pm.sample(TimePoint(5s)));
+  EXPECT_NEAR(cpu.evaluate({}).value, 95.0, 1e-9);  // unchanged until the second sample of the new pid
+  writeFakeProc(root, 4343, 15, 5, 100);
+  ASSERT_TRUE(pm.sample(TimePoint(6s)));
+  EXPECT_NEAR(cpu.evaluate({}).value, 10.0, 1e-9);
+  // Truncated and garbage files are "not read", never a crash.
+  std::ofstream(root / "4343" / "stat") << "4343 (x) S 1 2";
+  EXPECT_FALSE(pm.sample(TimePoint(7s)));
+  std::ofstream(root / "4343" / "stat") << "garbage";
+  EXPECT_FALSE(pm.sample(TimePoint(8s)));
+  std::filesystem::remove_all(root);
+
+  ProcessSampler self(getpid());  // the real /proc
+  EXPECT_TRUE(self.sample(TimePoint(0s)).ok);
+  const auto s1 = self.sample(TimePoint(1s));
+  EXPECT_TRUE(s1.ok && s1.has_cpu);
+  EXPECT_GT(s1.rss_mb, 0.1);
+}
+
+TEST(Monitoring, ClockOffsetIsTheLowerEnvelopeOfReceiveMinusStamp) {
+  ClockOffsetMonitor clock("clock:/peer", "peer", 20ms, 100ms, 2s);
+  EXPECT_EQ(clock.evaluate(TimePoint(0s)).level, Level::Ok);  // no samples
+  // The peer's clock is 30 ms behind ours; latencies 2..12 ms (seeded pattern), one 400 ms delay spike.
+  for (int k = 0; k < 20; ++k) {
+    const TimePoint sent_local = TimePoint(k * 100ms);
+    const auto latency = std::chrono::milliseconds(k == 7 ? 400 : 2 + (k * 7) % 11);
+    clock.onStamp(sent_local - 30ms, sent_local + latency);
+  }
+  double off = 0;
+  ASSERT_TRUE(clock.estimate(TimePoint(2s), off));
+  EXPECT_NEAR(off, 0.032, 1e-9);  // offset + the smallest latency in the window (2 ms), the spike ignored
+  EXPECT_EQ(clock.evaluate(TimePoint(2s)).level, Level::Warning);
+  // Later the peer is 150 ms ahead: once the old samples leave the window the error band is reached.
+  for (int k = 0; k < 20; ++k) {
+    const TimePoint sent_local = TimePoint(3s + k * 100ms);
+    clock.onStamp(sent_local + 150ms, sent_local + 5ms);
+  }
+  const Report r = clock.evaluate(TimePoint(5s));
+  EXPECT_NEAR(r.value, -0.145, 1e-9);
+  EXPECT_EQ(r.level, Level::Error);
+  EXPECT_EQ(r.category, "resource");
+  EXPECT_FALSE(clock.estimate(TimePoint(10s), off));  // window empty again
+}
+
+TEST(Monitoring, ConfigurationsAsDataSelectMonitorsAndRequiredComponents) {
+  MonitorSet set;
+  set.emplace<NavigationMonitor>({}, "navigation", 1, 1);
+  set.emplace<AgeMonitor>({}, "alive:/slam", "component", "/slam", 1s, 2s);
+  set.emplace<AgeMonitor>({}, "alive:/dock", "component", "/dock", 1s, 2s);
+  set.emplace<TopicRateMonitor>({}, "/scan", "/laser", 10.0);
+  set.emplace<ValueMonitor>({}, "cpu:main", "resource", "main", Band{.error_high = 90});
+  set.defineConfigurations({"operating: navigation /slam rate:/scan", "charging: /dock", "mapping: /slam rate:/scan"},
+                           "monitor.configurations");
+  EXPECT_EQ(set.configurationNames(), (std::set<std::string>{"charging", "mapping", "operating"}));
+  auto names = [&] {
+    std::vector<std::string> n;
+    for (const auto& r : set.evaluate(TimePoint(0s))) n.push_back(r.monitor);
+    return n;
+  };
+  set.setConfiguration("operating");
+  EXPECT_EQ(names(), (std::vector<std::string>{"navigation", "alive:/slam", "rate:/scan", "cpu:main"}));
+  EXPECT_EQ(set.requiredComponents(), std::vector<std::string>{"/slam"});
+  set.setConfiguration("charging");  // no navigation monitor while docked; the dock must run, SLAM need not
+  EXPECT_EQ(names(), (std::vector<std::string>{"alive:/dock", "cpu:main"}));  // cpu: named nowhere, so everywhere
+  EXPECT_EQ(set.requiredComponents(), std::vector<std::string>{"/dock"});
+  EXPECT_FALSE(set.active(*set.find("navigation")));
+  EXPECT_THROW(set.setConfiguration("dancing"), std::invalid_argument);
+  EXPECT_EQ(set.configuration(), "charging");
+
+  auto error = [](std::vector<std::string> entries) {
+    MonitorSet s;
+    s.emplace<NavigationMonitor>({}, "navigation", 1, 1);
+    try {
+      s.defineConfigurations(entries, "monitor.configurations");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error({"operating: navigation", "charging: /dock"}),
+            "monitor.configurations[1]: unknown monitor '/dock' (known: navigation)");
+  EXPECT_EQ(error({"operating navigation"}),
+            "monitor.configurations[0]: expected '<configuration>: <monitor or component> ...', got 'operating navigation'");
+  EXPECT_EQ(error({"a b: navigation"}),
+            "monitor.configurations[0]: expected '<configuration>: <monitor or component> ...', got 'a b: navigation'");
+  EXPECT_EQ(error({"a: navigation", "a:"}), "monitor.configurations[1]: configuration 'a' defined twice");
+  EXPECT_EQ(error({"operating: navigation", "charging:"}), "no error");  // a configuration without monitors
 }
 
 /// A simulated robot: components alive or dead, a 10 Hz topic from "camera", recoveries that take one tick.
@@ -180,6 +305,27 @@ TEST_F(MonitoredRun, ResourceErrorsOnlyAlertOnce) {
   for (int k = 0; k < 5; ++k) step();
   EXPECT_EQ(sys.calls, std::vector<std::string>{"alert:cpu:slam = 97"});
   EXPECT_FALSE(blocked());
+}
+
+TEST_F(MonitoredRun, ConfigurationSwitchedOnTheBlackboardDisablesTheNavigationMonitor) {
+  monitors.setRequiredComponents("charging", {"dock"});
+  for (int k = 0; k < 25; ++k) step();
+  tree.rootBlackboard()->set<std::string>("configuration", "charging");  // e.g. the task's "go charging" branch
+  step();
+  EXPECT_EQ(monitors.configuration(), "charging");
+  EXPECT_EQ(monitors.requiredComponents(), std::vector<std::string>{"dock"});
+  nav->onResult(false);  // a navigation error while docked is not an error of the charging configuration
+  for (int k = 0; k < 10; ++k) step();
+  EXPECT_FALSE(blocked());
+  EXPECT_TRUE(sys.calls.empty());
+  tree.rootBlackboard()->set<std::string>("configuration", "dancing");  // unknown: one alert, configuration kept
+  for (int k = 0; k < 3; ++k) step();
+  EXPECT_EQ(sys.calls, std::vector<std::string>{"alert:monitor configuration: unknown configuration 'dancing' "
+                                                "(defined: charging, operating)"});
+  EXPECT_EQ(monitors.configuration(), "charging");
+  tree.rootBlackboard()->set<std::string>("configuration", "operating");
+  step();
+  EXPECT_TRUE(blocked());  // back in operation the pending navigation error blocks the task
 }
 
 }  // namespace

@@ -126,25 +126,80 @@ class NavigationMonitor : public Monitor {
   int failures_ = 0;
 };
 
-/// CPU and memory of a process from /proc (Linux): CPU % of one core between two samples and resident set size.
+/// CPU and memory of a process from /proc (Linux): CPU % of one core between two samples (utime + stime of
+/// /proc/<pid>/stat, fields 14 and 15) and the resident set size (/proc/<pid>/statm, field 2, in pages).
 struct ProcessSample {
   double cpu_percent = 0.0;
   double rss_mb = 0.0;
-  bool ok = false;
+  bool ok = false;       ///< the files were read
+  bool has_cpu = false;  ///< a previous sample of the same pid exists, so cpu_percent means something
 };
 class ProcessSampler {
  public:
-  explicit ProcessSampler(int pid) : pid_(pid) {}
+  struct Options {
+    std::string proc_root = "/proc";
+    long clock_ticks = 0;  ///< per second; 0: sysconf(_SC_CLK_TCK)
+    long page_size = 0;    ///< bytes; 0: sysconf(_SC_PAGESIZE)
+  };
+  explicit ProcessSampler(int pid) : ProcessSampler(pid, Options{}) {}
+  ProcessSampler(int pid, Options o);
   ProcessSample sample(TimePoint now);
+  /// A new process (after a respawn): forgets the CPU history.
+  void setPid(int pid);
+  int pid() const { return pid_; }
 
  private:
   int pid_;
+  Options opts_;
   double last_cpu_s_ = -1.0;
   TimePoint last_t_{0};
 };
 
+/// CPU % and RSS [MB] of one process (a container) as two ValueMonitors "cpu:<name>" and "ram:<name>" of category
+/// "resource" (Table 5.1 "CPU, RAM ... Monitor: not in tolerance band -> send message"). Only the error bands' upper
+/// ends are meaningful; a process that cannot be read is reported by the liveness monitor, not here.
+class ProcessMonitor {
+ public:
+  ProcessMonitor(ValueMonitor& cpu, ValueMonitor& ram, ProcessSampler::Options o = {});
+  /// Samples the process if its pid is known (> 0); false if it could not be read (e.g. it died).
+  bool sample(TimePoint now);
+  void setPid(int pid);
+  int pid() const { return sampler_.pid(); }
+
+ private:
+  ValueMonitor& cpu_;
+  ValueMonitor& ram_;
+  ProcessSampler sampler_;
+};
+
+/// Clock offset between this host and a peer, from (peer stamp, local receive time) pairs of messages the peer
+/// publishes (Table 5.1 "NTP monitor"; the thesis compares NTP time differences). Each pair gives
+/// d = t_receive - t_stamp = offset + latency with latency >= 0, so the estimator is the lower envelope over a
+/// sliding window: offset^ = min(d) over the last `window`. It is biased by the smallest one-way latency in the window
+/// (positive; sub-millisecond on a LAN, more on Wi-Fi) and cannot see an asymmetric path; a peer that stamps late
+/// (stamp taken long before publishing) looks like a clock behind ours. The band applies to |offset^|; with no sample in
+/// the window the level is OK ("no samples"; a silent peer is the topic/liveness monitors' business).
+class ClockOffsetMonitor : public Monitor {
+ public:
+  ClockOffsetMonitor(std::string name, std::string target, Duration warn, Duration error,
+                     Duration window = std::chrono::seconds(5));
+  /// Thread-safe.
+  void onStamp(TimePoint peer_stamp, TimePoint local_receive);
+  /// Seconds (local - peer, minus the minimal latency); false if no sample is in the window.
+  bool estimate(TimePoint now, double& offset_s);
+  Report evaluate(TimePoint now) override;
+  void reset(TimePoint now) override;
+
+ private:
+  Band band_;
+  Duration window_;
+  std::mutex mutex_;
+  std::vector<std::pair<TimePoint, Duration>> samples_;  ///< (receive time, receive - stamp)
+};
+
 /// Monitors grouped into configurations (operating, charging, mapping: Stüde §5.3.1). Only the active
-/// configuration's monitors are evaluated; each configuration lists the components that must run.
+/// configuration's monitors are evaluated; each configuration lists the components that must run. Not thread-safe:
+/// configure, switch and evaluate from the tree's thread (the component's callback group).
 class MonitorSet {
  public:
   Monitor& add(std::unique_ptr<Monitor> m, std::set<std::string> configurations);
@@ -154,8 +209,18 @@ class MonitorSet {
   }
   void setRequiredComponents(const std::string& configuration, std::vector<std::string> components);
   const std::vector<std::string>& requiredComponents() const;
+  /// Configurations as data: entries '<name>: <item> <item> ...' where an item is a monitor name ("rate:/scan",
+  /// "navigation", "cpu:main", ...) or a component fqn ("/slam": its liveness monitor "alive:/slam", and the
+  /// component is required in that configuration). Monitors named in no entry stay active everywhere; a monitor
+  /// named in some entry is active only in those. Throws std::invalid_argument "<param>[i]: ..." on a bad entry or
+  /// an unknown monitor. Call after every monitor is added.
+  void defineConfigurations(const std::vector<std::string>& entries, const std::string& param = "configurations");
+  /// Names given to defineConfigurations/add/setRequiredComponents.
+  std::set<std::string> configurationNames() const;
+  /// Throws std::invalid_argument for a name no configuration was defined with (when any was defined).
   void setConfiguration(const std::string& name);
   const std::string& configuration() const { return config_; }
+  bool active(const Monitor& m) const;
   Monitor* find(const std::string& name) const;
   /// Reports of the active monitors.
   std::vector<Report> evaluate(TimePoint now);
@@ -171,6 +236,7 @@ class MonitorSet {
   };
   std::vector<Entry> monitors_;
   std::map<std::string, std::vector<std::string>> required_;
+  std::set<std::string> defined_;
   std::string config_ = "operating";
 };
 
