@@ -2,6 +2,8 @@
 // over the DDS services, and a container that survives components that throw or hang.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <thread>
 
 #include "cairn/container.hpp"
@@ -9,6 +11,8 @@
 #include "composition_interfaces/srv/ListNodes.hpp"
 #include "composition_interfaces/srv/LoadNode.hpp"
 #include "composition_interfaces/srv/UnloadNode.hpp"
+#include "cairn/parameter_msgs.hpp"
+#include "rcl_interfaces/srv/GetParameters.hpp"
 
 using namespace std::chrono_literals;
 using namespace composition_interfaces::srv;
@@ -119,4 +123,71 @@ TEST(Container, DuplicateNodeNamesAreRefused) {
   const auto r = mgr.load(cairn::LoadRequest{"cairn_demo::Listener", "same"});
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.error.find("already loaded"), std::string::npos) << r.error;
+}
+
+// A restart with restore_parameters brings a component back with what it was first loaded with (the bt executive's
+// RestartComponent relies on it), over the load_node service; the container's `pid` parameter names its process.
+TEST(Container, RestartRestoresTheOriginalLaunchParameters) {
+  auto ctx = cairn::Context::create();
+  cairn::Executor exec(cairn::Executor::Options{2});
+  cairn::ComponentLoader loader;
+  cairn::ComponentManager mgr(ctx, exec, "c5", loader);
+  std::thread spinner([&] { exec.spin(); });
+
+  cairn::LoadRequest first{"cairn_demo::Talker", "talker"};
+  first.node_namespace = "/robot";
+  first.parameters["rate_hz"] = 42.0;
+  first.parameters["text"] = std::string("launched");
+  first.remaps["/robot/chatter"] = "/speech";
+  const auto a = mgr.load(first);
+  ASSERT_TRUE(a.ok) << a.error;
+  ASSERT_FALSE(mgr.unload(a.unique_id));
+
+  auto cli_ctx = cairn::Context::create();
+  cairn::Executor cli_exec;
+  cairn::NodeOptions o("cli", &cli_exec);
+  o.context = cli_ctx;
+  o.start_parameter_services = false;
+  cairn::Node cli(o);
+  auto load = cli.create_client<LoadNode_Request, LoadNode_Response>("/c5/_container/load_node");
+  LoadNode_Request req;  // what a restart knows: class and name, not the parameters
+  req.plugin_name = "cairn_demo::Talker";
+  req.node_name = "talker";
+  req.node_namespace = "/robot";
+  rcl_interfaces::msg::Parameter restore;
+  restore.name = "restore_parameters";
+  restore.value = cairn::to_parameter_msg(cairn::ParameterValue(true));
+  req.extra_arguments.push_back(restore);
+  rcl_interfaces::msg::Parameter text;  // given parameters override the remembered ones
+  text.name = "text";
+  text.value = cairn::to_parameter_msg(cairn::ParameterValue(std::string("restarted")));
+  req.parameters.push_back(text);
+  auto resp = load->call(req, 20s);
+  ASSERT_TRUE(resp.has_value());
+  ASSERT_TRUE(resp->success) << resp->error_message;
+  auto* t = static_cast<cairn::Node*>(static_cast<cairn_demo::Talker*>(mgr.get(resp->unique_id).get()));
+  EXPECT_EQ(t->get_parameter<double>("rate_hz"), 42.0);
+  EXPECT_EQ(t->get_parameter<std::string>("text"), "restarted");
+  EXPECT_EQ(mgr.remembered("/robot/talker")->remaps.at("/robot/chatter"), "/speech");
+
+  req.node_name = "never_loaded";
+  auto none = load->call(req, 20s);
+  ASSERT_TRUE(none.has_value());
+  EXPECT_FALSE(none->success);
+  EXPECT_EQ(none->error_message, std::string(cairn::kNothingToRestore) + ": /robot/never_loaded was never loaded in container c5");
+  cairn::LoadRequest other{"cairn_demo::Listener", "talker"};
+  other.node_namespace = "/robot";
+  other.restore_parameters = true;
+  ASSERT_FALSE(mgr.unload(resp->unique_id));
+  EXPECT_EQ(mgr.load(other).error, "cannot restore /robot/talker as cairn_demo::Listener: it was loaded as cairn_demo::Talker");
+
+  auto params = cli.create_client<rcl_interfaces::srv::GetParameters_Request, rcl_interfaces::srv::GetParameters_Response>(
+      "/c5/get_parameters");
+  rcl_interfaces::srv::GetParameters_Request preq;
+  preq.names = {"pid"};
+  auto pid = params->call(preq, 20s);
+  ASSERT_TRUE(pid.has_value());
+  EXPECT_EQ(std::get<int64_t>(cairn::from_parameter_msg(pid->values.at(0))), static_cast<int64_t>(getpid()));
+  exec.cancel();
+  spinner.join();
 }

@@ -58,7 +58,7 @@ TEST(LaunchSpec, YamlSyntaxErrorNamesTheLine) {
 
 TEST(LaunchSpec, UnknownKey) {
   EXPECT_EQ(error_of("containers:\n  - name: c\n    component: []\n"),
-            "spec.yaml:3: container: unknown key 'component' (allowed: name, threads, components)");
+            "spec.yaml:3: container: unknown key 'component' (allowed: name, threads, components, respawn, respawn_delay)");
 }
 
 TEST(LaunchSpec, UnknownComponentClass) {
@@ -123,6 +123,27 @@ TEST(LaunchSpec, BadValuesOfKnownKeys) {
   EXPECT_EQ(error_of("processes:\n  - name: p\n"), "spec.yaml:2: process.cmd: expected a non-empty list");
   EXPECT_EQ(error_of("[1, 2]\n"), "spec.yaml:1: a launch spec is a map with 'containers' and/or 'processes'");
   EXPECT_EQ(error_of("containers:\n  - name: 9lives\n"), "spec.yaml:2: container.name: '9lives' is not a valid node name");
+}
+
+TEST(LaunchSpec, RespawnOptionsAndTheirBackoff) {
+  auto spec = cairn::parse_launch_spec_text("containers:\n  - name: c\n    respawn_delay: 0.5\n  - name: d\n    respawn: false\n"
+                                            "processes:\n  - name: p\n    cmd: [sleep, '1']\n    respawn: true\n",
+                                            "x.yaml");
+  const auto& c = spec.containers.at(0).respawn;
+  EXPECT_TRUE(c.respawn);
+  EXPECT_EQ(c.delay_for(1), 0.5);
+  EXPECT_EQ(c.delay_for(2), 1.0);
+  EXPECT_EQ(c.delay_for(4), 4.0);
+  EXPECT_EQ(c.delay_for(20), 30.0);  // capped
+  EXPECT_FALSE(spec.containers.at(1).respawn.respawn);
+  EXPECT_TRUE(spec.processes.at(0).respawn.respawn);
+  EXPECT_EQ(spec.processes.at(0).respawn.delay_for(1), 0.1);  // default
+  EXPECT_EQ((cairn::RespawnPolicy{true, 60.0}.delay_for(3)), 60.0);  // a delay above the cap stays
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    respawn_delay: -1\n"),
+            "spec.yaml:3: container.respawn_delay: -1 is outside [0, 3600]");
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    respawn: often\n"), "spec.yaml:3: container.respawn: expected true or false");
+  EXPECT_EQ(error_of("processes:\n  - name: p\n    cmd: [x]\n    respawn_delay: soon\n"),
+            "spec.yaml:4: process.respawn_delay: expected a number, got 'soon'");
 }
 
 TEST(LaunchSpec, ComponentThatThrowsInItsConstructor) {

@@ -1,5 +1,7 @@
 #include "cairn/container.hpp"
 
+#include <unistd.h>
+
 #include <cctype>
 #include <future>
 #include <iostream>
@@ -48,6 +50,8 @@ LoadRequest from_msg(const LoadNode_Request& r) {
     const auto v = from_parameter_msg(p.value);
     if (p.name == "use_intra_process_comms" && std::holds_alternative<bool>(v)) {
       out.use_intra_process = std::get<bool>(v);
+    } else if (p.name == "restore_parameters" && std::holds_alternative<bool>(v)) {
+      out.restore_parameters = std::get<bool>(v);
     } else if (p.name.rfind("qos:", 0) == 0 && std::holds_alternative<std::string>(v)) {
       // qos:<topic>:<key> = value
       const auto last = p.name.rfind(':');
@@ -64,6 +68,8 @@ ComponentManager::ComponentManager(std::shared_ptr<Context> ctx, Executor& exec,
   NodeOptions no(name, &exec);
   no.context = ctx_;
   node_ = std::make_unique<Node>(no);
+  node_->declare_parameter<int64_t>("pid", static_cast<int64_t>(getpid()),
+                                    ParameterDescriptor{"process id of this container (for CPU/RAM monitors)", {}, {}, true});
   node_->create_deferred_service<LoadNode_Request, LoadNode_Response>(
       "~/_container/load_node", [this](const LoadNode_Request& req, std::function<void(LoadNode_Response)> reply) {
         // construct off the executor thread: a slow constructor must not stall the container
@@ -109,8 +115,28 @@ ComponentManager::~ComponentManager() {
   loaded.clear();  // components are destroyed here, newest last
 }
 
-LoadResult ComponentManager::load(const LoadRequest& req) {
+LoadResult ComponentManager::load(const LoadRequest& given) {
   LoadResult res;
+  LoadRequest req = given;
+  if (given.restore_parameters) {
+    const std::string name = given.node_name.empty() ? default_node_name(given.class_name) : given.node_name;
+    const std::string fqn = (given.node_namespace == "/" ? "" : given.node_namespace) + "/" + name;
+    const auto old = remembered(fqn);
+    if (!old) {
+      res.error = std::string(kNothingToRestore) + ": " + fqn + " was never loaded in container " + name_;
+      CAIRN_WARN(node_->logger(), "load " << fqn << ": " << res.error);
+      return res;
+    }
+    if (!given.class_name.empty() && given.class_name != old->class_name) {
+      res.error = "cannot restore " + fqn + " as " + given.class_name + ": it was loaded as " + old->class_name;
+      return res;
+    }
+    req = *old;
+    for (const auto& [k, v] : given.parameters) req.parameters[k] = v;
+    for (const auto& [k, v] : given.remaps) req.remaps[k] = v;
+    for (const auto& [k, v] : given.qos_overrides) req.qos_overrides[k] = v;
+    req.restore_parameters = false;
+  }
   const ComponentFactory* factory = nullptr;
   try {
     factory = &loader_.factory(req.class_name);
@@ -170,6 +196,7 @@ LoadResult ComponentManager::load(const LoadRequest& req) {
   res.unique_id = next_id_++;
   res.full_node_name = fqn;
   loaded_[res.unique_id] = Loaded{fqn, req.class_name, std::move(obj)};
+  remembered_[fqn] = req;
   CAIRN_INFO(node_->logger(), "loaded " << req.class_name << " as " << fqn << " (id " << res.unique_id << ")");
   return res;
 }
@@ -194,6 +221,13 @@ std::shared_ptr<void> ComponentManager::get(uint64_t id) const {
   std::lock_guard l(mu_);
   auto it = loaded_.find(id);
   return it == loaded_.end() ? nullptr : it->second.object;
+}
+
+std::optional<LoadRequest> ComponentManager::remembered(const std::string& fqn) const {
+  std::lock_guard l(mu_);
+  auto it = remembered_.find(fqn);
+  if (it == remembered_.end()) return std::nullopt;
+  return it->second;
 }
 
 std::vector<std::pair<uint64_t, std::string>> ComponentManager::list() const {

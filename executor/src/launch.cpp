@@ -99,7 +99,7 @@ class SpecParser {
 
   LaunchContainer container(const YAML::Node& n, std::set<std::string>& names, std::set<std::string>& fqns) {
     if (!n.IsMap()) fail(n, "containers[]: expected a map");
-    allow_keys(n, "container", {"name", "threads", "components"});
+    allow_keys(n, "container", {"name", "threads", "components", "respawn", "respawn_delay"});
     LaunchContainer c;
     c.line = line_of(n);
     if (!n["name"]) fail(n, "container: missing 'name'");
@@ -107,6 +107,7 @@ class SpecParser {
     if (!valid_name(c.name)) fail(n["name"], "container.name: '" + c.name + "' is not a valid node name");
     if (!names.insert(c.name).second) fail(n["name"], "container.name: duplicate name '" + c.name + "'");
     if (n["threads"]) c.threads = static_cast<std::size_t>(number(n["threads"], "container.threads", 1, 64));
+    respawn(n, "container", c.respawn);
     if (const auto comps = n["components"]) {
       if (!comps.IsSequence()) fail(comps, "container.components: expected a list");
       for (const auto& x : comps) c.components.push_back(component(x, fqns));
@@ -172,7 +173,7 @@ class SpecParser {
 
   LaunchProcess process(const YAML::Node& n, std::set<std::string>& names) {
     if (!n.IsMap()) fail(n, "processes[]: expected a map");
-    allow_keys(n, "process", {"name", "cmd", "respawn"});
+    allow_keys(n, "process", {"name", "cmd", "respawn", "respawn_delay"});
     LaunchProcess p;
     p.line = line_of(n);
     if (!n["name"]) fail(n, "process: missing 'name'");
@@ -180,8 +181,13 @@ class SpecParser {
     if (!names.insert(p.name).second) fail(n["name"], "process.name: duplicate name '" + p.name + "'");
     if (!n["cmd"] || !n["cmd"].IsSequence() || n["cmd"].size() == 0) fail(n, "process.cmd: expected a non-empty list");
     for (const auto& a : n["cmd"]) p.cmd.push_back(str(a, "process.cmd[]"));
-    if (n["respawn"]) p.respawn = boolean(n["respawn"], "process.respawn");
+    respawn(n, "process", p.respawn);
     return p;
+  }
+
+  void respawn(const YAML::Node& n, const std::string& where, RespawnPolicy& r) const {
+    if (n["respawn"]) r.respawn = boolean(n["respawn"], where + ".respawn");
+    if (n["respawn_delay"]) r.delay_s = number(n["respawn_delay"], where + ".respawn_delay", 0, 3600);
   }
 
   void load_params_file(const std::string& rel, LaunchComponent& c) const {
@@ -231,6 +237,12 @@ std::string resolve_in(const std::string& ns, const std::string& name) {
 }
 
 }  // namespace
+
+double RespawnPolicy::delay_for(int consecutive) const {
+  double d = delay_s;
+  for (int k = 1; k < consecutive && d < 30.0; ++k) d *= 2;
+  return std::min(d, std::max(delay_s, 30.0));
+}
 
 LaunchSpec parse_launch_spec_text(const std::string& text, const std::string& file) {
   YAML::Node root;
@@ -343,12 +355,37 @@ namespace cairn {
 
 namespace {
 
-struct RunningContainer {
+using SteadyTime = std::chrono::steady_clock::time_point;
+
+/// A supervised child: when it dies it is respawned after its policy's backoff (or forgotten).
+struct Supervised {
+  RespawnPolicy policy;
+  pid_t pid = -1;
+  int restarts = 0;
+  int consecutive = 0;  ///< respawns in a row without 10 s of uptime in between
+  SteadyTime started{};
+  SteadyTime due = SteadyTime::max();  ///< respawn time while dead
+
+  /// Records the death at `now`; returns the backoff in seconds, or a negative value if it is not respawned.
+  double died(SteadyTime now) {
+    pid = -1;
+    if (!policy.respawn) return -1.0;
+    consecutive = now - started >= std::chrono::seconds(10) ? 1 : consecutive + 1;
+    ++restarts;
+    const double d = policy.delay_for(consecutive);
+    due = now + std::chrono::microseconds(static_cast<int64_t>(d * 1e6));
+    return d;
+  }
+};
+
+struct RunningContainer : Supervised {
   std::string name;
   std::size_t threads = 1;
   std::vector<const LaunchComponent*> components;
-  pid_t pid = -1;
-  int restarts = 0;
+};
+
+struct RunningProcess : Supervised {
+  const LaunchProcess* spec = nullptr;
 };
 
 composition_interfaces::srv::LoadNode_Request load_request(const LaunchComponent& c) {
@@ -420,11 +457,19 @@ int run_launch_main(int argc, char** argv) {
   const std::string self = self_executable();
 
   std::vector<RunningContainer> containers;
+  auto running = [](const LaunchContainer& c, std::string name, std::size_t threads) {
+    RunningContainer rc;
+    rc.policy = c.respawn;
+    rc.name = std::move(name);
+    rc.threads = threads;
+    return rc;
+  };
   for (const auto& c : spec.containers) {
-    RunningContainer rc{c.name, c.threads, {}, -1, 0};
+    RunningContainer rc = running(c, c.name, c.threads);
     for (const auto& comp : c.components) {
       if (comp.isolated) {
-        containers.push_back(RunningContainer{c.name + "__" + comp.name, 1, {&comp}, -1, 0});
+        containers.push_back(running(c, c.name + "__" + comp.name, 1));
+        containers.back().components.push_back(&comp);
       } else {
         rc.components.push_back(&comp);
       }
@@ -440,6 +485,8 @@ int run_launch_main(int argc, char** argv) {
   const auto load_timeout = std::chrono::milliseconds(static_cast<int64_t>(spec.load_timeout_s * 1000));
 
   auto start = [&](RunningContainer& rc) -> bool {
+    rc.started = std::chrono::steady_clock::now();
+    rc.due = SteadyTime::max();
     rc.pid = spawn_process({self, "container", "--name", rc.name, "--threads", std::to_string(rc.threads),
                             "--load-timeout", std::to_string(spec.load_timeout_s)});
     auto client = node.create_client<composition_interfaces::srv::LoadNode_Request,
@@ -483,12 +530,17 @@ int run_launch_main(int argc, char** argv) {
     }
   };
 
-  std::vector<std::pair<const LaunchProcess*, pid_t>> procs;
+  std::vector<RunningProcess> procs;
   auto all_pids = [&] {
     std::vector<pid_t> p;
     for (auto& c : containers) p.push_back(c.pid);
-    for (auto& [lp, pid] : procs) p.push_back(pid);
+    for (auto& rp : procs) p.push_back(rp.pid);
     return p;
+  };
+  auto start_process = [&](RunningProcess& rp) {
+    rp.started = std::chrono::steady_clock::now();
+    rp.due = SteadyTime::max();
+    rp.pid = spawn_process(rp.spec->cmd);
   };
 
   for (auto& rc : containers) {
@@ -505,7 +557,11 @@ int run_launch_main(int argc, char** argv) {
   }
   for (const auto& p : spec.processes) {
     try {
-      procs.emplace_back(&p, spawn_process(p.cmd));
+      RunningProcess rp;
+      rp.spec = &p;
+      rp.policy = p.respawn;
+      procs.push_back(rp);
+      start_process(procs.back());
     } catch (const std::exception& e) {
       std::cerr << "cairn: " << spec.file << ":" << p.line << ": process " << p.name << ": " << e.what() << "\n";
       stop_all(all_pids());
@@ -519,18 +575,11 @@ int run_launch_main(int argc, char** argv) {
                                   : std::chrono::steady_clock::time_point::max();
   int rc_exit = 0;
   while (!Executor::signal_received() && std::chrono::steady_clock::now() < t_end) {
-    int status = 0;
-    const pid_t pid = waitpid(-1, &status, WNOHANG);
-    if (pid <= 0) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-      continue;
-    }
+    const auto now = std::chrono::steady_clock::now();
+    // Respawns whose backoff has passed.
     for (auto& rc : containers) {
-      if (rc.pid != pid) continue;
-      rc.pid = -1;
-      ++rc.restarts;
-      CAIRN_ERROR(log, "container " << rc.name << " " << describe_wait_status(status) << "; respawning (restart "
-                                    << rc.restarts << ")");
+      if (rc.pid > 0 || rc.due > now) continue;
+      CAIRN_WARN(log, "respawning container " << rc.name << " (restart " << rc.restarts << ")");
       bool ok = false;
       try {
         ok = start(rc);
@@ -539,14 +588,45 @@ int run_launch_main(int argc, char** argv) {
       }
       if (!ok) CAIRN_ERROR(log, "container " << rc.name << " could not be restarted");
     }
-    for (auto& [lp, ppid] : procs) {
-      if (ppid != pid) continue;
-      if (lp->respawn) {
-        CAIRN_WARN(log, "process " << lp->name << " " << describe_wait_status(status) << "; respawning");
-        ppid = spawn_process(lp->cmd);
+    for (auto& rp : procs) {
+      if (rp.pid > 0 || rp.due > now) continue;
+      CAIRN_WARN(log, "respawning process " << rp.spec->name << " (restart " << rp.restarts << ")");
+      try {
+        start_process(rp);
+      } catch (const std::exception& e) {
+        CAIRN_ERROR(log, "respawn of process " << rp.spec->name << " failed: " << e.what());
+        rp.died(std::chrono::steady_clock::now());  // try again after the next backoff
+      }
+    }
+    int status = 0;
+    const pid_t pid = waitpid(-1, &status, WNOHANG);
+    if (pid <= 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      continue;
+    }
+    auto backoff = [](double d) {
+      std::ostringstream o;
+      o << d;
+      return o.str();
+    };
+    for (auto& rc : containers) {
+      if (rc.pid != pid) continue;
+      const double d = rc.died(std::chrono::steady_clock::now());
+      if (d < 0) {
+        CAIRN_ERROR(log, "container " << rc.name << " " << describe_wait_status(status) << "; respawn is off");
       } else {
-        CAIRN_INFO(log, "process " << lp->name << " " << describe_wait_status(status));
-        ppid = -1;
+        CAIRN_ERROR(log, "container " << rc.name << " " << describe_wait_status(status) << "; respawning (restart "
+                                      << rc.restarts << ") in " << backoff(d) << " s");
+      }
+    }
+    for (auto& rp : procs) {
+      if (rp.pid != pid) continue;
+      const double d = rp.died(std::chrono::steady_clock::now());
+      if (d < 0) {
+        CAIRN_INFO(log, "process " << rp.spec->name << " " << describe_wait_status(status));
+      } else {
+        CAIRN_WARN(log, "process " << rp.spec->name << " " << describe_wait_status(status) << "; respawning in "
+                                   << backoff(d) << " s");
       }
     }
   }

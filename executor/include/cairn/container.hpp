@@ -1,5 +1,6 @@
 // The component container: loads components by class name into one process and serves
-// <container>/_container/load_node, unload_node and list_nodes (composition_interfaces) over DDS.
+// <container>/_container/load_node, unload_node and list_nodes (composition_interfaces) over DDS. The container's
+// node has a read-only parameter `pid` (its process id), so monitors can find the process of a container.
 #ifndef CAIRN_CONTAINER_HPP
 #define CAIRN_CONTAINER_HPP
 
@@ -28,7 +29,15 @@ struct LoadRequest {
   std::map<std::string, std::string> remaps;
   std::map<std::string, QoSOverride> qos_overrides;
   bool use_intra_process = true;
+  /// Restart with the original launch parameters: take the parameters, remaps, QoS overrides and intra-process
+  /// setting of the last successful load of the same node (fqn) in this container, overlaid by the ones given here
+  /// (class: empty means the remembered one). Over DDS: extra argument `restore_parameters: true` of load_node.
+  bool restore_parameters = false;
 };
+
+/// Error text of a restore_parameters load when this container never loaded that node (e.g. it was just
+/// respawned and its supervisor has not reloaded it yet); a caller may retry later.
+inline constexpr const char* kNothingToRestore = "nothing to restore";
 
 struct LoadResult {
   bool ok = false;
@@ -55,6 +64,8 @@ class ComponentManager {
   std::vector<std::pair<uint64_t, std::string>> list() const;
   /// The component object (for tests and in-process tools); null if no such id.
   std::shared_ptr<void> get(uint64_t id) const;
+  /// What the node `fqn` was last loaded with (kept after unload, so a restart can restore it).
+  std::optional<LoadRequest> remembered(const std::string& fqn) const;
   const std::string& name() const { return name_; }
 
  private:
@@ -72,6 +83,7 @@ class ComponentManager {
   mutable std::mutex mu_;
   uint64_t next_id_ = 1;
   std::map<uint64_t, Loaded> loaded_;
+  std::map<std::string, LoadRequest> remembered_;  ///< fqn -> effective request of its last successful load
   std::vector<std::thread> workers_;
 };
 

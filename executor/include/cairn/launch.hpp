@@ -41,9 +41,18 @@ struct LaunchComponent {
   std::string fqn() const { return (ns == "/" ? "" : ns) + "/" + name; }
 };
 
+/// Respawn backoff: the k-th respawn in a row waits min(delay * 2^(k-1), max(delay, 30 s)); a process that ran
+/// 10 s or longer before it died starts the count again.
+struct RespawnPolicy {
+  bool respawn = false;
+  double delay_s = 0.1;
+  double delay_for(int consecutive) const;
+};
+
 struct LaunchContainer {
   std::string name;
   std::size_t threads = 1;
+  RespawnPolicy respawn{true, 0.1};  ///< keys respawn, respawn_delay; also for its isolated components' containers
   std::vector<LaunchComponent> components;
   int line = 0;
 };
@@ -51,7 +60,7 @@ struct LaunchContainer {
 struct LaunchProcess {
   std::string name;
   std::vector<std::string> cmd;
-  bool respawn = false;
+  RespawnPolicy respawn;
   int line = 0;
 };
 
