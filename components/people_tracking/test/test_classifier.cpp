@@ -104,3 +104,29 @@ TEST(Classifier, TrainingNeedsBothClasses) {
   for (auto& s : samples) s.positive = false;
   EXPECT_THROW(LegClassifier::train(samples, {}), InputError);
 }
+
+TEST(Classifier, LabelledClustersRoundTripThroughCsvAndBadRowsNameTheLine) {
+  const auto a = data(5, 4);
+  const std::string path = tmpPath("clusters.csv");
+  saveLabelledClusters(path, a);
+  const auto b = loadLabelledClusters(path);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].positive, b[i].positive);
+    EXPECT_EQ(a[i].object_class, b[i].object_class);
+    EXPECT_EQ(a[i].scene, b[i].scene);
+    for (std::size_t k = 0; k < kNumFeatures; ++k) EXPECT_NEAR(a[i].features[k], b[i].features[k], 1e-6 * (1 + std::abs(a[i].features[k])));
+  }
+  {
+    std::ofstream f(path, std::ios::app);
+    f << "1,person_leg,0,1,2\n";
+  }
+  try {
+    (void)loadLabelledClusters(path);
+    FAIL() << "short row accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ":" + std::to_string(a.size() + 2)), std::string::npos) << e.what();
+  }
+  EXPECT_THROW((void)loadLabelledClusters(path + ".missing"), InputError);
+  std::filesystem::remove(path);
+}

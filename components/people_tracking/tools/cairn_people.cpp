@@ -1,7 +1,9 @@
 // cairn-people: command-line front end of the people tracking core (`cairn people <verb> ...`).
 //   train      build labelled clusters from generated scenes and train a leg classifier
 //   eval       precision/recall of a model on held-out generated scenes
+//   gen-train  labelled clusters from components/sim scans (CSV for train/eval --data)
 //   bench      replay pedestrian trajectories in a simulated scene and score the tracker (CLEAR MOT)
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -12,6 +14,9 @@
 #include "cairn/people_tracking/classifier.hpp"
 #include "tool_bench.hpp"
 #include "tool_mask_bench.hpp"
+#ifdef CAIRN_PEOPLE_SIM
+#include "sim_training.hpp"
+#endif
 
 
 using namespace cairn::people_tracking;
@@ -77,12 +82,66 @@ double toDouble(const Args& a, const std::string& k, double def) {
 void usage() {
   std::puts(
       "usage: cairn people <verb> [options]\n"
-      "  train --kind adaboost|svm [--features arras14@1|stuede5@1] [--scenes 1500] [--seed 1] --out FILE\n"
-      "  eval  --model FILE [--scenes 500] [--seed 1000003] [--json]\n"
+      "  train --kind adaboost|svm [--features arras14@1|stuede5@1] [--scenes 1500] [--seed 1] [--data CSV[,CSV]] --out FILE\n"
+      "  eval  --model FILE [--scenes 500] [--seed 1000003] [--data CSV] [--json]\n"
+      "  gen-train [--worlds apartment,office,warehouse] [--episodes 200] [--seed 1] [--scans-per-episode 6] -o FILE\n"
       "  bench --world auto --trajectories FILE [--robot-path FILE] [--seed N] [--duration S] [--max-people N]\n"
       "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S] [--dump DIR] [--json]\n"
       "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--json]");
 }
+
+// Comma-separated list of labelled-cluster CSV files ("" = none).
+std::vector<LabelledCluster> loadData(const std::string& list) {
+  std::vector<LabelledCluster> out;
+  std::size_t begin = 0;
+  while (begin < list.size()) {
+    const std::size_t end = std::min(list.find(',', begin), list.size());
+    const std::vector<LabelledCluster> part = loadLabelledClusters(list.substr(begin, end - begin));
+    out.insert(out.end(), part.begin(), part.end());
+    begin = end + 1;
+  }
+  return out;
+}
+
+#ifdef CAIRN_PEOPLE_SIM
+int genTrain(const Args& a) {
+  SimTrainingParams p;
+  const std::string worlds = a.get("worlds", "");
+  if (!worlds.empty()) {
+    p.worlds.clear();
+    std::size_t begin = 0;
+    while (begin <= worlds.size()) {
+      const std::size_t end = std::min(worlds.find(',', begin), worlds.size());
+      p.worlds.push_back(worlds.substr(begin, end - begin));
+      begin = end + 1;
+    }
+  }
+  p.episodes = static_cast<int>(toLong(a, "episodes", p.episodes));
+  p.seed = static_cast<std::uint64_t>(toLong(a, "seed", 1));
+  p.scans_per_episode = static_cast<int>(toLong(a, "scans-per-episode", p.scans_per_episode));
+  p.max_walkers = static_cast<int>(toLong(a, "max-walkers", p.max_walkers));
+  if (p.episodes < 1 || p.scans_per_episode < 1) fail("gen-train: --episodes and --scans-per-episode must be >= 1");
+  if (p.max_walkers < p.min_walkers) fail("gen-train: --max-walkers must be >= 1");
+  const std::string out = a.get("o", a.get("out", ""));
+  if (out.empty()) fail("gen-train needs -o FILE");
+  SimLabelStats st;
+  const std::vector<SimLabelledCluster> clusters = simLabelledClusters(p, &st);
+  std::vector<LabelledCluster> samples;
+  std::map<std::string, std::size_t> by_class;
+  for (const SimLabelledCluster& c : clusters) {
+    samples.push_back(c.sample);
+    ++by_class[toString(c.sample.object_class)];
+  }
+  saveLabelledClusters(out, samples);
+  std::printf("gen-train: %d episodes (seed %llu), %zu scans, %zu clusters: %zu person legs, %zu other, %zu ambiguous "
+              "(skipped), %zu beyond range ->",
+              p.episodes, static_cast<unsigned long long>(p.seed), st.scans, samples.size(), st.positives, st.negatives,
+              st.ambiguous, st.far);
+  for (const auto& [cls, n] : by_class) std::printf(" %s %zu", cls.c_str(), n);
+  std::printf(" -> %s\n", out.c_str());
+  return 0;
+}
+#endif
 
 int train(const Args& a) {
   ClassifierTrainParams p;
@@ -93,19 +152,23 @@ int train(const Args& a) {
   p.svm_gamma = toDouble(a, "svm-gamma", p.svm_gamma);
   p.positive_weight = toDouble(a, "pos-weight", p.positive_weight);
   TrainingDataParams d;
-  d.scenes = static_cast<int>(toLong(a, "scenes", 1500));
+  // --data only: the CSV files; --data and --scenes: both (a mix); neither: generated scenes.
+  d.scenes = static_cast<int>(toLong(a, "scenes", a.has("data") ? 0 : 1500));
   d.seed = static_cast<std::uint64_t>(toLong(a, "seed", 1));
   const std::string out = a.get("out", "");
   if (out.empty()) fail("train needs --out FILE");
-  const auto samples = generateLabelledClusters(d);
+  auto samples = generateLabelledClusters(d);
+  const std::vector<LabelledCluster> data = loadData(a.get("data", ""));
+  samples.insert(samples.end(), data.begin(), data.end());
   std::size_t pos = 0;
   for (const auto& s : samples) pos += s.positive;
   const LegClassifier c = LegClassifier::train(samples, p);
   c.save(out);
   const ClassifierMetrics m = c.evaluate(samples);
-  std::printf("trained %s on %s: %zu clusters (%zu person) from %d scenes, seed %llu; training P=%.3f R=%.3f -> %s\n",
+  std::printf("trained %s on %s: %zu clusters (%zu person) from %d generated scenes (seed %llu) + %zu from --data; "
+              "training P=%.3f R=%.3f -> %s\n",
               toString(p.kind), p.feature_set.c_str(), samples.size(), pos, d.scenes,
-              static_cast<unsigned long long>(d.seed), m.precision(), m.recall(), out.c_str());
+              static_cast<unsigned long long>(d.seed), data.size(), m.precision(), m.recall(), out.c_str());
   return 0;
 }
 
@@ -114,22 +177,26 @@ int eval(const Args& a) {
   if (path.empty()) fail("eval needs --model FILE");
   const LegClassifier c = LegClassifier::load(path);
   TrainingDataParams d;
-  d.scenes = static_cast<int>(toLong(a, "scenes", 500));
+  d.scenes = static_cast<int>(toLong(a, "scenes", a.has("data") ? 0 : 500));
   d.seed = static_cast<std::uint64_t>(toLong(a, "seed", 1000003));
-  const auto samples = generateLabelledClusters(d);
+  auto samples = generateLabelledClusters(d);
+  const std::vector<LabelledCluster> data = loadData(a.get("data", ""));
+  samples.insert(samples.end(), data.begin(), data.end());
+  if (samples.empty()) fail("eval: no samples (--scenes 0 and no --data)");
   const ClassifierMetrics m = c.evaluate(samples);
   if (a.flag("json")) {
     std::printf(
-        "{\"model\": \"%s\", \"kind\": \"%s\", \"feature_set\": \"%s\", \"scenes\": %d, \"seed\": %llu, "
+        "{\"model\": \"%s\", \"kind\": \"%s\", \"feature_set\": \"%s\", \"scenes\": %d, \"seed\": %llu, \"data\": \"%s\", "
         "\"clusters\": %zu, \"tp\": %zu, \"fp\": %zu, \"tn\": %zu, \"fn\": %zu, \"precision\": %.4f, "
         "\"recall\": %.4f, \"f1\": %.4f}\n",
         path.c_str(), toString(c.kind()), c.featureSet().key().c_str(), d.scenes,
-        static_cast<unsigned long long>(d.seed), samples.size(), m.tp, m.fp, m.tn, m.fn, m.precision(), m.recall(),
+        static_cast<unsigned long long>(d.seed), a.get("data", "").c_str(), samples.size(), m.tp, m.fp, m.tn, m.fn, m.precision(), m.recall(),
         m.f1());
   } else {
-    std::printf("%s (%s, %s) on %d held-out scenes (seed %llu, %zu clusters): precision %.3f recall %.3f F1 %.3f\n",
+    std::printf("%s (%s, %s) on %d held-out scenes (seed %llu) + data '%s' (%zu clusters): precision %.3f recall %.3f "
+                "F1 %.3f\n",
                 path.c_str(), toString(c.kind()), c.featureSet().key().c_str(), d.scenes,
-                static_cast<unsigned long long>(d.seed), samples.size(), m.precision(), m.recall(), m.f1());
+                static_cast<unsigned long long>(d.seed), a.get("data", "").c_str(), samples.size(), m.precision(), m.recall(), m.f1());
   }
   return 0;
 }
@@ -146,6 +213,20 @@ int main(int argc, char** argv) {
     if (verb == "train") return train(parse(argc, argv, 2, {}));
     if (verb == "eval") return eval(parse(argc, argv, 2, {"json"}));
     if (verb == "bench") return runBenchVerb(argc, argv);
+#ifdef CAIRN_PEOPLE_SIM
+    if (verb == "gen-train") {
+      // -o is the one single-dash option (as the issue writes it); map it to --o.
+      std::vector<std::string> args(argv, argv + argc);
+      std::vector<char*> ptrs;
+      for (std::string& x : args) {
+        if (x == "-o") x = "--o";
+        ptrs.push_back(x.data());
+      }
+      return genTrain(parse(argc, ptrs.data(), 2, {}));
+    }
+#else
+    if (verb == "gen-train") fail("gen-train was not built (needs the sim component)");
+#endif
 #ifdef CAIRN_PEOPLE_MASK_BENCH
     if (verb == "mask-bench") return runMaskBenchVerb(argc, argv);
 #else

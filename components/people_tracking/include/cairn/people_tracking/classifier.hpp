@@ -80,6 +80,13 @@ struct TrainingDataParams {
 // ranges give disjoint train/held-out sets.
 std::vector<LabelledCluster> generateLabelledClusters(const TrainingDataParams& params);
 
+// Labelled clusters as CSV (e.g. from `cairn people gen-train`, which labels simulator scans): header
+// `label,class,scene,<all registry feature names in registry order>`, label 1 = person leg, class = toString(ObjectClass).
+// save throws InputError when the file cannot be written; load throws InputError naming file:line on a missing file,
+// a header that does not list the registry's features, or a malformed row.
+void saveLabelledClusters(const std::string& path, const std::vector<LabelledCluster>& samples);
+std::vector<LabelledCluster> loadLabelledClusters(const std::string& path);
+
 // Default shipped model of a kind: <package>/models/leg_<kind>_<set>.yml (source tree or install share/).
 std::string defaultModelPath(ClassifierKind kind, const std::string& feature_set_name);
 
