@@ -9,8 +9,30 @@
 #include <random>
 #include <stdexcept>
 
+#include "gemm.hpp"
+
 namespace cairn::copa_map {
 namespace {
+
+// C = alpha op(A) op(B) + beta C through the run-time dispatched GEMM (gemm.hpp: AVX2/AVX-512 where the CPU has
+// them; Eigen's own product is compiled for the portable baseline only). Blocks of column-major matrices are
+// passed without copies.
+void gemm(Eigen::Ref<Eigen::MatrixXd> C, const Eigen::Ref<const Eigen::MatrixXd>& A, bool trans_a,
+          const Eigen::Ref<const Eigen::MatrixXd>& B, bool trans_b, double alpha = 1.0, double beta = 0.0) {
+  detail::GemmArgs g{trans_a, trans_b, C.rows(), C.cols(), trans_a ? A.rows() : A.cols(), alpha,
+                     A.data(), A.outerStride(), B.data(), B.outerStride(), beta, C.data(), C.outerStride()};
+  if ((trans_a ? A.cols() : A.rows()) != g.M || (trans_b ? B.rows() : B.cols()) != g.N ||
+      (trans_b ? B.cols() : B.rows()) != g.K)
+    throw std::logic_error("gemm: dimension mismatch");
+  detail::gemm(g);
+}
+
+Eigen::MatrixXd product(const Eigen::Ref<const Eigen::MatrixXd>& A, bool trans_a,
+                        const Eigen::Ref<const Eigen::MatrixXd>& B, bool trans_b) {
+  Eigen::MatrixXd C(trans_a ? A.cols() : A.rows(), trans_b ? B.rows() : B.cols());
+  gemm(C, A, trans_a, B, trans_b);
+  return C;
+}
 
 constexpr double kLog2Pi = 1.83787706640934548356;
 constexpr double kSqrtPi = 1.77245385090551602730;
@@ -298,7 +320,7 @@ Eigen::MatrixXd timesLower(const Eigen::MatrixXd& A, const Eigen::MatrixXd& L, b
     if (a_lower)
       out.block(j0, j0, h, w).noalias() = A.block(j0, j0, h, h).triangularView<Eigen::Lower>() * Lb;
     else
-      out.middleCols(j0, w).noalias() = A.rightCols(h) * Lb;
+      gemm(out.middleCols(j0, w), A.rightCols(h), false, Lb, false);
   });
   return out;
 }
@@ -309,7 +331,7 @@ Eigen::MatrixXd weightedGram(const Eigen::MatrixXd& A, const Eigen::VectorXd& d)
   Eigen::MatrixXd out(m, m);
   forColumnBlocks(m, [&](Eigen::Index j0, Eigen::Index w) {
     const Eigen::MatrixXd DA = d.asDiagonal() * A.middleCols(j0, w);
-    out.block(j0, j0, m - j0, w).noalias() = A.rightCols(m - j0).transpose() * DA;
+    gemm(out.block(j0, j0, m - j0, w), A.rightCols(m - j0), true, DA, false);
   });
   out.triangularView<Eigen::StrictlyUpper>() = out.transpose();
   return out;
@@ -325,7 +347,7 @@ void computeMoments(const LatentGp& lat, const Eigen::MatrixXd& Kinv, const Eige
                     LatentMoments& q) {
   c.Knu = lat.kernel->K(X, lat.Z);
   c.kdiag = lat.kernel->Kdiag(X);
-  c.A.noalias() = c.Knu * Kinv;  // A = K_nu K_uu⁻¹ (GEMM; faster than two triangular solves)
+  c.A = product(c.Knu, false, Kinv, false);  // A = K_nu K_uu⁻¹ (GEMM; faster than two triangular solves)
   c.AL = timesLower(c.A, lat.L);
   q.m.noalias() = c.A * lat.mu;
   q.v = c.kdiag - (c.A.array() * c.Knu.array()).rowwise().sum().matrix() +
@@ -396,14 +418,12 @@ ElboEvaluation SvgpModel::evaluate(const Eigen::MatrixXd& X, const Eigen::Vector
       // (so K⁻¹S = V Lᵀ and K⁻¹SK⁻¹ = V Vᵀ): 5 m³ flops instead of forming S and K⁻¹S (7 m³).
       const Eigen::MatrixXd V = timesLower(Kinv, lat.L);
       Eigen::MatrixXd Gnu = dq[k].m * beta.transpose();
-      Eigen::MatrixXd ASK(c.A.rows(), m);
-      ASK.noalias() = c.AL * V.transpose();  // A S K⁻¹
-      ASK -= c.A;
+      Eigen::MatrixXd ASK = c.A;
+      gemm(ASK, c.AL, false, V, true, 1.0, -1.0);  // A S K⁻¹ - A
       Gnu.noalias() += 2.0 * (dq[k].v.asDiagonal() * ASK);
       Gnu *= scale;
       // Only the symmetric part of G_uu matters (K_uu is symmetric), so K⁻¹SQ + QSK⁻¹ enters as 2 K⁻¹SQ.
-      Eigen::MatrixXd Guu(m, m);
-      Guu.noalias() = V * timesLower(pl.Q, lat.L).transpose();  // K⁻¹ S Q
+      Eigen::MatrixXd Guu = product(V, false, timesLower(pl.Q, lat.L), true);  // K⁻¹ S Q
       Guu = scale * (pl.Q - 2.0 * Guu - pl.b * beta.transpose());
       Guu -= 0.5 * (Kinv - weightedGram(V.transpose(), Eigen::VectorXd::Ones(m)) - beta * beta.transpose());
       // Symmetrize and fold onto the lower triangle: the kernel gradient skips the zero upper half.
@@ -471,13 +491,14 @@ LatentMoments SvgpModel::latentMoments(int k, const Eigen::MatrixXd& X) const {
   // m = K_nu β with β = K⁻¹μ; v = k_nn + diag(K_nu B K_un) with B = K⁻¹ (S - K) K⁻¹ (eqs. 4.13-4.16).
   const Eigen::VectorXd beta = llt.solve(lat.mu);
   const Eigen::MatrixXd KinvL = llt.solve(lat.L.triangularView<Eigen::Lower>().toDenseMatrix());
-  Eigen::MatrixXd Bm = KinvL * KinvL.transpose() - llt.solve(Eigen::MatrixXd::Identity(m, m));
+  Eigen::MatrixXd Bm = llt.solve(Eigen::MatrixXd::Identity(m, m));
+  gemm(Bm, KinvL, false, KinvL, true, 1.0, -1.0);
   const Eigen::Index chunk = 4000;
   for (Eigen::Index s = 0; s < X.rows(); s += chunk) {
     const Eigen::Index len = std::min(chunk, X.rows() - s);
     const Eigen::MatrixXd Knu = lat.kernel->K(X.middleRows(s, len), lat.Z);
     out.m.segment(s, len).noalias() = Knu * beta;
-    const Eigen::MatrixXd KB = Knu * Bm;
+    const Eigen::MatrixXd KB = product(Knu, false, Bm, false);
     out.v.segment(s, len) =
         (lat.kernel->Kdiag(X.middleRows(s, len)) + (KB.array() * Knu.array()).rowwise().sum().matrix()).cwiseMax(1e-12);
   }
