@@ -26,6 +26,7 @@
 #include "cairn/bt_executive/monitoring.hpp"
 #include "cairn/bt_executive/xml_loader.hpp"
 #include "cairn/component.hpp"
+#include "cairn/container.hpp"
 #include "cairn/dds.hpp"
 #include "cairn/data_files.hpp"
 #include "cairn/msgs/type_support.hpp"
@@ -887,11 +888,19 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
 
   bt::monitoring::MonitorSet& monitors() { return monitors_; }
 
+  /// The monitor.* parameters (README "Monitoring over DDS").
+  struct Config {
+    std::vector<std::string> topics, components, processes, clocks;
+    bt::Duration liveness_warn{}, liveness_error{}, process_period{}, clock_window{};
+    std::string alert_topic, clear_topic, cmd_vel_topic;
+  };
+
   /// Parses the monitor.* parameters; throws std::invalid_argument naming the parameter and entry.
-  void configure(const std::vector<std::string>& topics, const std::vector<std::string>& components,
-                 bt::Duration liveness_warn, bt::Duration liveness_error, const std::string& alert_topic,
-                 const std::string& clear_topic, const std::string& cmd_vel_topic) {
+  void configure(const Config& cfg) {
     namespace m = bt::monitoring;
+    const auto& [topics, components, processes, clocks, liveness_warn, liveness_error, process_period, clock_window,
+                 alert_topic, clear_topic, cmd_vel_topic] = cfg;
+    process_period_ = process_period;
     for (std::size_t i = 0; i < components.size(); ++i) {
       const auto w = splitWords(components[i]);
       const std::string where = "monitor.components[" + std::to_string(i) + "]";
@@ -909,29 +918,54 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
       const double hz = w.size() == 4 ? std::strtod(w[2].c_str(), &end) : 0.0;
       if (w.size() != 4 || end == nullptr || *end != '\0' || !(hz > 0.0))
         throw std::invalid_argument(where + ": expected '<topic> <type> <expected_hz> <component>', got '" + topics[i] + "'");
-      std::string type = w[1];
-      if (type.find("/msg/") == std::string::npos && type.find('/') != std::string::npos)
-        type.insert(type.find('/'), "/msg");  // std_msgs/String -> std_msgs/msg/String
-      const cairn::msgs::TypeSupport* ts = cairn::msgs::find_type_support(type);
-      if (ts == nullptr) throw std::invalid_argument(where + ": unknown message type '" + w[1] + "'");
+      const cairn::msgs::TypeSupport* ts = typeSupport(w[1], where);
       auto& mon = monitors_.emplace<m::TopicRateMonitor>({}, node_.resolve_name(w[0]), w[3], hz);
       rates_.push_back(&mon);
-      if (node_.dry_run()) continue;
-      // Any QoS offered matches a best-effort, volatile reader: the monitor only counts arrivals.
-      cairn::QoS q;
-      q.best_effort();
-      auto* monp = &mon;
-      auto reader = std::make_shared<std::unique_ptr<cairn::DdsReader>>();
-      auto sample = std::shared_ptr<void>(ts->create(), ts->destroy);
-      *reader = std::make_unique<cairn::DdsReader>(
-          node_.context(), cairn::dds_topic_name(node_.resolve_name(w[0])), *ts, q,
-          cairn::DdsEndpointOptions{node_.fully_qualified_name(), false},
-          [this, monp, sample, mu = std::make_shared<std::mutex>()](cairn::DdsReader& r) {
-            std::lock_guard l(*mu);
-            cairn::MessageInfo info;
-            while (r.take(sample.get(), info)) monp->onMessage(bt::TimePoint{node_.now().ns});
-          });
-      readers_.push_back(std::move(*reader));
+      addReader(w[0], *ts, [this, monp = &mon](const cairn::MessageInfo&) { monp->onMessage(bt::TimePoint{node_.now().ns}); });
+    }
+    for (std::size_t i = 0; i < processes.size(); ++i) {
+      const auto w = splitWords(processes[i]);
+      const std::string where = "monitor.processes[" + std::to_string(i) + "]";
+      double v[4] = {0, 0, 0, 0};
+      bool ok = w.size() == 5;
+      for (std::size_t k = 0; ok && k < 4; ++k) {
+        char* end = nullptr;
+        v[k] = std::strtod(w[k + 1].c_str(), &end);
+        ok = end != w[k + 1].c_str() && *end == '\0' && v[k] > 0.0;
+      }
+      if (!ok || v[0] > v[1] || v[2] > v[3])
+        throw std::invalid_argument(where + ": expected '<container> <cpu_warn_%> <cpu_error_%> <ram_warn_mb> "
+                                    "<ram_error_mb>' (positive, warn <= error), got '" + processes[i] + "'");
+      // Stüde Table 5.1 "CPU, RAM monitor": not in the tolerance band -> send a message (category resource).
+      auto& cpu = monitors_.emplace<m::ValueMonitor>({}, "cpu:" + w[0], "resource", w[0], m::Band{.warn_high = v[0], .error_high = v[1]});
+      auto& ram = monitors_.emplace<m::ValueMonitor>({}, "ram:" + w[0], "resource", w[0], m::Band{.warn_high = v[2], .error_high = v[3]});
+      ProcessState ps;
+      ps.container = w[0];
+      ps.monitor = std::make_unique<m::ProcessMonitor>(cpu, ram);
+      if (!node_.dry_run())
+        ps.params = hub_.client<rcl_interfaces::srv::GetParameters_Request, rcl_interfaces::srv::GetParameters_Response>(
+            "/" + w[0] + "/get_parameters");
+      processes_.push_back(std::move(ps));
+    }
+    for (std::size_t i = 0; i < clocks.size(); ++i) {
+      const auto w = splitWords(clocks[i]);
+      const std::string where = "monitor.clocks[" + std::to_string(i) + "]";
+      char *e1 = nullptr, *e2 = nullptr;
+      const double warn = w.size() == 4 ? std::strtod(w[2].c_str(), &e1) : 0.0;
+      const double err = w.size() == 4 ? std::strtod(w[3].c_str(), &e2) : 0.0;
+      if (w.size() != 4 || *e1 != '\0' || *e2 != '\0' || !(warn > 0.0) || !(err >= warn))
+        throw std::invalid_argument(where + ": expected '<topic> <type> <warn_ms> <error_ms>' (0 < warn <= error), got '" +
+                                    clocks[i] + "'");
+      const cairn::msgs::TypeSupport* ts = typeSupport(w[1], where);
+      const std::string topic = node_.resolve_name(w[0]);
+      auto& mon = monitors_.emplace<m::ClockOffsetMonitor>(
+          {}, "clock:" + topic, topic, std::chrono::nanoseconds(static_cast<std::int64_t>(warn * 1e6)),
+          std::chrono::nanoseconds(static_cast<std::int64_t>(err * 1e6)), clock_window);
+      // The DDS source timestamp is the writer's system clock; compare with ours at the take.
+      addReader(w[0], *ts, [monp = &mon](const cairn::MessageInfo& info) {
+        const auto local = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch());
+        monp->onStamp(bt::TimePoint{std::chrono::nanoseconds(info.source_timestamp_ns)}, bt::TimePoint{local});
+      });
     }
     alert_topic_ = alert_topic;
     cmd_vel_topic_ = cmd_vel_topic;
@@ -943,7 +977,7 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
     for (auto* r : rates_) r->reset(now);                     // and a full rate window
   }
 
-  bool empty() const { return components_.empty() && rates_.empty(); }
+  bool empty() const { return components_.empty() && rates_.empty() && processes_.empty(); }
 
   /// Called by the poll timer in the node's callback group: advances restarts, handles list replies and sends the
   /// next list requests.
@@ -962,10 +996,15 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
               std::find(resp.full_node_names.begin(), resp.full_node_names.end(), c.fqn) != resp.full_node_names.end())
             c.liveness->heartbeat(now);
       }
-      if (send_lists && !l.pending.valid() && l.client && l.client->service_is_ready())
+      // A request to a container that died is never answered: give up on it and ask again.
+      if (l.pending.valid() && now - l.sent > kReplyTimeout) l.pending = {};
+      if (send_lists && !l.pending.valid() && l.client && l.client->service_is_ready()) {
         l.pending = l.client->async_send(ListReq{});
+        l.sent = now;
+      }
     }
     for (auto it = restarts_.begin(); it != restarts_.end();) it = advance(*it, now) ? restarts_.erase(it) : std::next(it);
+    for (auto& p : processes_) pollProcess(p, now);
   }
 
   // ---- RecoveryInterface
@@ -1021,14 +1060,20 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
   static constexpr double kRecoverySpeed = 0.1;  // m/s, backwards (chosen; Table 5.1 gives no speed)
   static constexpr double kRecoveryTurn = 0.3;   // rad/s, "slow rotate" (chosen)
 
+  /// A list or parameter request unanswered this long is dropped and sent again (its server died, e.g. a killed
+  /// container whose DDS participant has not timed out yet).
+  static constexpr bt::Duration kReplyTimeout = std::chrono::seconds(2);
+
   struct ListState {
     std::shared_ptr<cairn::Client<ListReq, ListResp>> client;
     std::future<ListResp> pending;
+    bt::TimePoint sent{0};
   };
   struct Restart {
     ComponentSpec spec;
     Done done;
     int stage = 0;  // 0 send list, 1 list sent, 2 unload sent, 3 load sent
+    bt::TimePoint list_sent{0};
     std::future<ListResp> list;
     std::future<UnloadResp> unload;
     std::future<LoadResp> load;
@@ -1060,7 +1105,9 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
     try {
       if (r.stage == 0) {
         auto c = hub_.client<ListReq, ListResp>(base + "list_nodes");
-        if (c->service_is_ready()) r.list = c->async_send(ListReq{}), r.stage = 1;
+        if (c->service_is_ready()) r.list = c->async_send(ListReq{}), r.stage = 1, r.list_sent = now;
+      } else if (r.stage == 1 && !ready(r.list) && now - r.list_sent > kReplyTimeout) {
+        r.stage = 0;  // the container died under us: ask its successor
       } else if (r.stage == 1 && ready(r.list)) {
         const ListResp l = r.list.get();
         auto it = std::find(l.full_node_names.begin(), l.full_node_names.end(), r.spec.fqn);
@@ -1080,6 +1127,14 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
         r.stage = 3;
       } else if (r.stage == 3 && ready(r.load)) {
         const LoadResp l = r.load.get();
+        if (!l.success && (l.error_message.rfind(cairn::kNothingToRestore, 0) == 0 ||
+                           l.error_message.find("is already loaded") != std::string::npos)) {
+          // A freshly respawned container whose launcher has not reloaded the node yet (nothing to restore), or
+          // whose launcher reloaded it just before us (already loaded): list again until the deadline, then restart
+          // that instance with its launch parameters.
+          r.stage = 0;
+          return false;
+        }
         return l.success ? finish(true, "") : finish(false, "load: " + l.error_message);
       }
     } catch (const std::exception& e) {
@@ -1088,15 +1143,86 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
     return false;
   }
 
-  /// The component with its class and name; parameters and remaps of the original load are not known here (the
-  /// component comes back with its defaults — README "Monitoring over DDS").
+  /// The component with its class and name, and `restore_parameters`: the container loads it with the parameters,
+  /// remaps and QoS it was last loaded with (its launch parameters), which the executive does not know.
   static LoadReq loadRequest(const ComponentSpec& s) {
     LoadReq r;
     r.plugin_name = s.class_name;
     const auto slash = s.fqn.rfind('/');
     r.node_name = s.fqn.substr(slash + 1);
     r.node_namespace = slash == 0 ? "/" : s.fqn.substr(0, slash);
+    rcl_interfaces::msg::Parameter restore;
+    restore.name = "restore_parameters";
+    restore.value = cairn::to_parameter_msg(cairn::ParameterValue(true));
+    r.extra_arguments.push_back(restore);
     return r;
+  }
+
+  static const cairn::msgs::TypeSupport* typeSupport(std::string type, const std::string& where) {
+    const std::string given = type;
+    if (type.find("/msg/") == std::string::npos && type.find('/') != std::string::npos)
+      type.insert(type.find('/'), "/msg");  // std_msgs/String -> std_msgs/msg/String
+    const cairn::msgs::TypeSupport* ts = cairn::msgs::find_type_support(type);
+    if (ts == nullptr) throw std::invalid_argument(where + ": unknown message type '" + given + "'");
+    return ts;
+  }
+
+  /// A best-effort, volatile DDS reader of any registered type (any offered QoS matches it); `on` per message.
+  void addReader(const std::string& topic, const cairn::msgs::TypeSupport& ts, std::function<void(const cairn::MessageInfo&)> on) {
+    if (node_.dry_run()) return;
+    cairn::QoS q;
+    q.best_effort();
+    auto sample = std::shared_ptr<void>(ts.create(), ts.destroy);
+    readers_.push_back(std::make_unique<cairn::DdsReader>(
+        node_.context(), cairn::dds_topic_name(node_.resolve_name(topic)), ts, q,
+        cairn::DdsEndpointOptions{node_.fully_qualified_name(), false},
+        [sample, on = std::move(on), mu = std::make_shared<std::mutex>()](cairn::DdsReader& r) {
+          std::lock_guard l(*mu);
+          cairn::MessageInfo info;
+          while (r.take(sample.get(), info)) on(info);
+        }));
+  }
+
+  using ParamReq = rcl_interfaces::srv::GetParameters_Request;
+  using ParamResp = rcl_interfaces::srv::GetParameters_Response;
+  /// CPU/RAM of a container's process: its pid from the container node's `pid` parameter (asked again whenever
+  /// the process cannot be read, e.g. after a respawn), sampled every monitor.process_sample_ms from /proc.
+  struct ProcessState {
+    std::string container;
+    std::unique_ptr<bt::monitoring::ProcessMonitor> monitor;
+    std::shared_ptr<cairn::Client<ParamReq, ParamResp>> params;
+    std::future<ParamResp> pending;
+    bt::TimePoint sent{0};
+    bt::TimePoint next_sample{0};
+    bool need_pid = true;
+  };
+
+  void pollProcess(ProcessState& p, bt::TimePoint now) {
+    if (ready(p.pending)) {
+      try {
+        const ParamResp resp = p.pending.get();
+        const cairn::ParameterValue v = resp.values.empty() ? cairn::ParameterValue{} : cairn::from_parameter_msg(resp.values[0]);
+        if (const auto* pid = std::get_if<int64_t>(&v)) {
+          p.monitor->setPid(static_cast<int>(*pid));
+          p.need_pid = false;
+          p.next_sample = now;
+        }
+      } catch (const std::exception&) {
+      }
+    }
+    if (p.need_pid) {
+      if (p.pending.valid() && now - p.sent > kReplyTimeout) p.pending = {};
+      if (!p.pending.valid() && p.params && p.params->service_is_ready()) {
+        ParamReq req;
+        req.names = {"pid"};
+        p.pending = p.params->async_send(req);
+        p.sent = now;
+      }
+      return;
+    }
+    if (now < p.next_sample) return;
+    p.next_sample = now + process_period_;
+    if (!p.monitor->sample(now)) p.need_pid = true;  // gone: ask the (respawned) container for its new pid
   }
 
   void publishTwist(double v, double w) {
@@ -1135,6 +1261,8 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
   std::vector<std::unique_ptr<cairn::DdsReader>> readers_;
   std::vector<bt::monitoring::TopicRateMonitor*> rates_;
   std::vector<Restart> restarts_;
+  std::vector<ProcessState> processes_;
+  bt::Duration process_period_{std::chrono::seconds(1)};
   std::string alert_topic_, clear_topic_, cmd_vel_topic_;
   std::uint64_t clear_listener_ = 0;
   bt::Scheduler::TimerId drive_timer_ = 0;
@@ -1205,10 +1333,53 @@ class ExecutiveNode : public cairn::Node {
     const std::string clear_topic = declare_parameter<std::string>(
         "monitor.clear_topic", "bt/all_clear", D{"a message here is the supervisor's all-clear for AskSupervisor", {}, {}, true});
     const std::string cmd_vel = declare_parameter<std::string>("monitor.cmd_vel_topic", "cmd_vel", D{"MoveBackwards / SlowRotate (open loop)", {}, {}, true});
-    system_.configure(mon_topics, mon_components, std::chrono::milliseconds(live_warn), std::chrono::milliseconds(live_err),
-                      alert_topic, clear_topic, cmd_vel);
+    DdsSystem::Config mc;
+    mc.topics = mon_topics;
+    mc.components = mon_components;
+    mc.processes = declare_parameter<std::vector<std::string>>(
+        "monitor.processes", {},
+        D{"CPU/RAM of container processes: '<container> <cpu_warn_%> <cpu_error_%> <ram_warn_mb> <ram_error_mb>'", {}, {}, true});
+    mc.clocks = declare_parameter<std::vector<std::string>>(
+        "monitor.clocks", {}, D{"clock offset to a peer publishing on a topic: '<topic> <type> <warn_ms> <error_ms>'", {}, {}, true});
+    mc.liveness_warn = std::chrono::milliseconds(live_warn);
+    mc.liveness_error = std::chrono::milliseconds(live_err);
+    mc.process_period = std::chrono::milliseconds(declare_parameter<int>(
+        "monitor.process_sample_ms", 1000, D{"CPU/RAM sampling period (CPU % is the mean over it)", 10, 3600000, true}));
+    mc.clock_window = std::chrono::milliseconds(declare_parameter<int>(
+        "monitor.clock_window_ms", 5000, D{"clock offset: minimum of receive - stamp over this window", 10, 3600000, true}));
+    mc.alert_topic = alert_topic;
+    mc.clear_topic = clear_topic;
+    mc.cmd_vel_topic = cmd_vel;
+    system_.configure(mc);
     if (nav_failures > 0)
       nav_monitor_ = &system_.monitors().emplace<bt::monitoring::NavigationMonitor>({}, "navigation", nav_failures, nav_failures);
+    // Configurations (Stüde §5.3.1): which monitors are active and which components must run, switched by the tree
+    // (@configuration) or by a message on monitor.configuration_topic.
+    system_.monitors().defineConfigurations(
+        declare_parameter<std::vector<std::string>>(
+            "monitor.configurations", {},
+            D{"'<configuration>: <monitor name or component fqn> ...' (empty: every monitor in every configuration)", {}, {}, true}),
+        "monitor.configurations");
+    try {
+      system_.monitors().setConfiguration(declare_parameter<std::string>(
+          "monitor.configuration", "operating", D{"configuration active at start", {}, {}, true}));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("monitor.configuration: ") + e.what());
+    }
+    const std::string config_topic = declare_parameter<std::string>(
+        "monitor.configuration_topic", "bt/configuration",
+        D{"std_msgs/String naming the configuration to switch to (empty: none)", {}, {}, true});
+    if (!config_topic.empty() && !dry_run()) {
+      hub_.ensureSubscription(config_topic, "std_msgs/String");
+      hub_.listen(config_topic, [this](const std::string& name) {
+        try {
+          system_.monitors().setConfiguration(name);
+          CAIRN_INFO(logger(), "monitor configuration: " << name);
+        } catch (const std::invalid_argument& e) {
+          system_.sendAlert(std::string("monitor configuration: ") + e.what());
+        }
+      });
+    }
     bt::monitoring::registerMonitoringNodes(factory_, system_.monitors(), system_);
     {
       bt::NodeManifest m;
