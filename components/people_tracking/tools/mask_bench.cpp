@@ -1,14 +1,19 @@
 // cairn people mask-bench: does person masking help SLAM? (Yuan §3.2.1, Tables 3.1/3.2: 48-67 % lower position
-// error with the guide masked.) A guide walks the world's home-tour route ahead of the robot in the simulator
-// (components/sim); the robot follows the same route. The same scans feed two GraphSlam instances: raw, and with
-// the guide's beams set to NaN by the people pipeline (detectLegs -> PeopleTracker::updateLegs -> GuideTracker
-// -> maskScan). Both trajectories are scored against ground truth in the same run. Tool only: the core does not
-// depend on the SLAM or the simulator.
+// error with the guide masked.) A guide walks a tour of the world ahead of the robot in the simulator
+// (components/sim). By default the robot follows the guide as in Yuan's experiments (§3.2.1, person following of
+// §2.2): the guide is the tracker's guide (GuideTracker, closest in front), and the robot drives along the guide's
+// tracked trail (so it does not cut corners at doorways) until it is `follow_distance` behind the guide, turning
+// towards the trail point ahead (direction following, Yuan §2.2). `--robot route` keeps the old setting (the robot
+// drives the route on its own). The same scans feed two GraphSlam instances: raw, and with the guide's beams set
+// to NaN by the people pipeline (detectLegs -> PeopleTracker::updateLegs -> GuideTracker -> maskScan). Both
+// trajectories are scored against ground truth in the same run. Tool only: the core does not depend on the SLAM
+// or the simulator.
 #include "tool_mask_bench.hpp"
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,6 +26,7 @@
 #include "cairn/people_tracking/tracker.hpp"
 #include "cairn/sim/simulator.hpp"
 #include "cairn/sim/world.hpp"
+#include "sim_training.hpp"
 
 namespace gs = cairn::graph_slam;
 namespace sim = cairn::sim;
@@ -37,6 +43,12 @@ struct MaskBenchParams {
   double max_duration = 400.0;
   double heading_drift = 0.03;  // rad/m, odometry heading drift (as in the SLAM pipeline test): SLAM must match
   double scale_error = 0.03;    // odometry scale error
+  bool follow = true;           // robot follows the tracked guide (Yuan's setting); false: drives the route itself
+  bool keep_spurs = false;      // guide walks the route as is (with out-and-back spurs); default: spurs removed
+  double follow_distance = 1.2; // m, the robot stops closer than this to the guide (choice; Yuan gives no value)
+  double max_v = 0.7;           // m/s, following speed limit
+  double max_w = 1.0;           // rad/s
+  double fov_deg = 360.0;       // laser field of view (Yuan's robot: a front laser; 180 deg is the closer setting)
   bool json = false;
 };
 
@@ -93,12 +105,28 @@ gs::SlamOptions slamOptions(const sim::Pose2& mount) {
   return o;
 }
 
+// Removes out-and-back spurs (a -> b -> a) so that the guide never turns round and walks back past a following
+// robot; repeated until none is left.
+std::vector<sim::Vec2> withoutSpurs(std::vector<sim::Vec2> r) {
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t i = 1; i + 1 < r.size(); ++i)
+      if (sim::norm(r[i + 1] - r[i - 1]) < 1e-6) {
+        r.erase(r.begin() + static_cast<long>(i), r.begin() + static_cast<long>(i) + 2);
+        changed = true;
+        break;
+      }
+  }
+  return r;
+}
+
 int run(const MaskBenchParams& p) {
   sim::World world = sim::loadWorld(sim::resolveWorldPath(p.world));
   const auto rt = world.routes.find(p.route);
   if (rt == world.routes.end() || rt->second.size() < 2)
     throw InputError("world '" + p.world + "' has no route '" + p.route + "' with at least two waypoints");
-  const std::vector<sim::Vec2> route = rt->second;
+  const std::vector<sim::Vec2> route = p.keep_spurs ? rt->second : withoutSpurs(rt->second);
+  if (route.size() < 2) throw InputError("route '" + p.route + "' has fewer than two waypoints without its spurs");
   // Only the guide: no crowd, no recorded people. The guide starts `lead` metres ahead on the first leg.
   world.crowd.reset();
   world.people.clear();
@@ -111,20 +139,25 @@ int run(const MaskBenchParams& p) {
   guide.waypoints.insert(guide.waypoints.end(), route.begin() + 1, route.end());
   guide.speed = p.speed;
   world.people.push_back(guide);
+  double tour_length = 0.0;
+  for (std::size_t i = 1; i < guide.waypoints.size(); ++i)
+    tour_length += sim::norm(guide.waypoints[i] - guide.waypoints[i - 1]);
 
   sim::SimConfig cfg;
   cfg.seed = p.seed;
   cfg.crowd = false;
   cfg.odometry.heading_drift = p.heading_drift;
   cfg.odometry.scale_error = p.scale_error;
+  cfg.laser.fov = p.fov_deg * M_PI / 180.0;
   cfg.start = sim::Pose2{route[0].x, route[0].y, std::atan2(r1.y() - r0.y(), r1.x() - r0.x())};
   sim::Simulator s(world, cfg);
-  sim::RouteConfig rc;
-  rc.speed = p.speed;
-  s.followRoute(route, rc);
-  sim::SimOutput out;
-  while (s.routeActive() && s.time() < p.max_duration) s.advance(1.0, out);
-  if (out.scans.empty()) throw InputError("simulation produced no scans");
+  if (!p.follow) {
+    sim::RouteConfig rc;
+    rc.speed = p.speed;
+    s.followRoute(route, rc);
+  }
+  // Following: the guide's tour plus time to catch up; route mode: until the route is done.
+  const double duration = std::min(p.max_duration, p.follow ? tour_length / p.speed + 3.0 : p.max_duration);
 
   const sim::Pose2 mount = cfg.laser.mount;
   gs::GraphSlam raw(slamOptions(mount)), masked(slamOptions(mount));
@@ -133,36 +166,96 @@ int run(const MaskBenchParams& p) {
   const PersonDetector detector(classifier);
   PeopleTracker tracker;
   GuideTracker guider;
-  std::size_t tracking_scans = 0, masked_beams = 0;
-  for (const sim::LaserScan& scan : out.scans) {
-    const sim::Pose2& o = nearest(out.odometry, scan.stamp).pose;
-    raw.addScan(scan, gs::Pose2{{o.x, o.y}, o.theta});
+  std::size_t tracking_scans = 0, masked_beams = 0, guide_in_field = 0, stalled_scans = 0;
+  double travelled = 0.0, guide_distance_sum = 0.0;
+  int stall_run = 0, recovery_scans = 0;
+  std::size_t recoveries = 0;
+  std::deque<Eigen::Vector2d> trail;  // the guide's tracked positions (odometry frame) still ahead of the robot
+  sim::SimOutput out;
+  std::size_t next_scan = 0;
+  sim::Twist2 cmd;
+  sim::Pose2 last_truth = s.groundTruth();
+  while (p.follow ? s.time() < duration : (s.routeActive() && s.time() < duration)) {
+    s.setCommand(cmd);
+    s.advance(1.0 / cfg.laser.rate, out);
+    const sim::Pose2 truth = s.groundTruth();
+    const double step = std::hypot(truth.x - last_truth.x, truth.y - last_truth.y);
+    travelled += step;
+    last_truth = truth;
+    for (; next_scan < out.scans.size(); ++next_scan) {
+      const sim::LaserScan& scan = out.scans[next_scan];
+      const sim::Pose2& o = nearest(out.odometry, scan.stamp).pose;
+      raw.addScan(scan, gs::Pose2{{o.x, o.y}, o.theta});
 
-    LaserScan ls;
-    ls.stamp = scan.stamp;
-    ls.angle_min = scan.angle_min;
-    ls.angle_increment = scan.angle_increment;
-    ls.range_min = scan.range_min;
-    ls.range_max = scan.range_max;
-    ls.ranges = scan.ranges;
-    const Pose2 base{o.x, o.y, o.theta};
-    const Eigen::Vector2d lp = base.transform({mount.x, mount.y});
-    const Pose2 sensor{lp.x(), lp.y(), o.theta + mount.theta};
-    tracker.updateLegs(scan.stamp, detector.detectLegs(ls), sensor, detector.params(), &ls);
-    const std::vector<Track> tracks = tracker.outputTracks();
-    if (guider.state() == GuideState::kSearch) guider.selectClosestInFront(tracks, sensor, scan.stamp);
-    const GuideStatus st = guider.update(tracks, sensor, scan.stamp);
-    sim::LaserScan filtered = scan;
-    if (st.state == GuideState::kTracking) {
-      for (const Track& t : tracks)
-        if (t.id == guider.guideId()) {
-          masked_beams += maskScan(ls, {{sensor.inverseTransform(t.position()), personRadius(t.leg_separation)}});
-          filtered.ranges = ls.ranges;
-          ++tracking_scans;
+      LaserScan ls = fromSimScan(scan);
+      const Pose2 base{o.x, o.y, o.theta};
+      const Eigen::Vector2d lp = base.transform({mount.x, mount.y});
+      const Pose2 sensor{lp.x(), lp.y(), o.theta + mount.theta};
+      tracker.updateLegs(scan.stamp, detector.detectLegs(ls), sensor, detector.params(), &ls);
+      const std::vector<Track> tracks = tracker.outputTracks();
+      if (guider.state() == GuideState::kSearch) guider.selectClosestInFront(tracks, sensor, scan.stamp);
+      const GuideStatus st = guider.update(tracks, sensor, scan.stamp);
+      sim::LaserScan filtered = scan;
+      if (st.state == GuideState::kTracking && st.track) {
+        masked_beams += maskScan(ls, {{sensor.inverseTransform(st.track->position()), personRadius(st.track->leg_separation)}});
+        filtered.ranges = ls.ranges;
+        ++tracking_scans;
+        if (trail.empty() || (trail.back() - st.track->position()).norm() > 0.1) trail.push_back(st.track->position());
+      }
+      masked.addScan(filtered, gs::Pose2{{o.x, o.y}, o.theta});
+
+      // Ground-truth diagnostics: is the guide in Yuan's field (front semicircle, 8 m) of the robot?
+      if (!s.people().empty()) {
+        const sim::Vec2 g = s.people().front().position;
+        const double dx = g.x - truth.x, dy = g.y - truth.y;
+        const double ahead = std::cos(truth.theta) * dx + std::sin(truth.theta) * dy;
+        guide_in_field += ahead > 0.0 && std::hypot(dx, dy) < 8.0;
+        guide_distance_sum += std::hypot(dx, dy);
+      }
+      const bool stalled = p.follow && cmd.v > 0.05 && step < 0.2 * cmd.v / cfg.laser.rate;
+      stalled_scans += stalled;
+      stall_run = stalled ? stall_run + 1 : 0;
+
+      if (!p.follow) continue;
+      // Follow the guide's trail (odometry frame): drop trail points the robot has reached, steer to the next
+      // one, drive while the guide is farther than follow_distance. Without a guide, finish the trail slowly
+      // (the guide went that way: re-acquisition) and then stop.
+      const Eigen::Vector2d rb(o.x, o.y);
+      while (trail.size() > 1 && (trail.front() - rb).norm() < 0.35) trail.pop_front();
+      cmd = {};
+      // Recovery: in contact with furniture for 3 scans, back off for 0.5 s.
+      if (stall_run >= 3) recovery_scans = 5;
+      if (recovery_scans > 0) {
+        --recovery_scans;
+        cmd.v = -0.2;
+        ++recoveries;
+        continue;
+      }
+      if (!trail.empty()) {
+        // Direction to the next trail point plus a repulsion from returns closer than `clear` (potential field;
+        // the robot, 0.28 m footprint, is wider than the guide whose trail it drives). The guide's own beams are
+        // NaN in `ls` while it is tracked, so the guide does not repel.
+        const Eigen::Vector2d to_world = trail.front() - rb;
+        Eigen::Vector2d dir = base.rotation().transpose() * to_world.normalized();
+        const double clear = 0.55;
+        for (std::size_t i = 0; i < ls.ranges.size(); ++i) {
+          if (!ls.valid(i) || ls.ranges[i] > clear + 0.3) continue;
+          const Eigen::Vector2d q = Eigen::Vector2d(mount.x, mount.y) + Eigen::Rotation2Dd(mount.theta) * ls.point(i);
+          const double d = q.norm();
+          if (d < clear && d > 1e-3 && q.x() > -0.1) dir -= 0.08 * (clear - d) / clear * q / d;
         }
+        const double bearing = std::atan2(dir.y(), dir.x());
+        const bool tracking = st.state == GuideState::kTracking && st.track;
+        const double gap = tracking ? (st.track->position() - rb).norm() - p.follow_distance
+                                    : (trail.back() - rb).norm() - 0.35;
+        const double v_lim = tracking ? p.max_v : 0.5 * p.max_v;
+        cmd.v = std::clamp(0.8 * gap, 0.0, v_lim) * std::max(0.0, std::cos(bearing));
+        cmd.w = std::clamp(1.5 * bearing, -p.max_w, p.max_w);
+        if (!tracking && gap <= 0.0) trail.clear();
+      }
     }
-    masked.addScan(filtered, gs::Pose2{{o.x, o.y}, o.theta});
   }
+  if (out.scans.empty()) throw InputError("simulation produced no scans");
   raw.finish();
   masked.finish();
   const TrajectoryError er = trajectoryError(raw.trajectory(), out.ground_truth);
@@ -175,21 +268,26 @@ int run(const MaskBenchParams& p) {
   const TrajectoryError eo = trajectoryError(odom_traj, out.ground_truth);
   const double ratio = er.rmse > 0 ? em.rmse / er.rmse : 0.0;
   const double guide_frac = double(tracking_scans) / double(out.scans.size());
+  const double n_scans = double(out.scans.size());
   if (p.json) {
     std::printf(
-        "{\"world\": \"%s\", \"route\": \"%s\", \"seed\": %llu, \"speed\": %.2f, \"duration_s\": %.1f, \"scans\": %zu, "
-        "\"guide_tracked_fraction\": %.3f, \"masked_beams_per_tracked_scan\": %.1f, "
+        "{\"world\": \"%s\", \"route\": \"%s\", \"robot\": \"%s\", \"seed\": %llu, \"speed\": %.2f, \"duration_s\": %.1f, "
+        "\"scans\": %zu, \"robot_travelled_m\": %.1f, \"guide_in_field_fraction\": %.3f, \"guide_mean_distance_m\": %.2f, "
+        "\"stalled_fraction\": %.3f, \"recovery_scans\": %zu, \"guide_tracked_fraction\": %.3f, \"masked_beams_per_tracked_scan\": %.1f, "
         "\"odometry\": {\"ate_rmse\": %.4f, \"ate_mean\": %.4f, \"ate_max\": %.4f}, "
         "\"slam_unmasked\": {\"ate_rmse\": %.4f, \"ate_mean\": %.4f, \"ate_max\": %.4f}, "
         "\"slam_masked\": {\"ate_rmse\": %.4f, \"ate_mean\": %.4f, \"ate_max\": %.4f}, "
         "\"masked_over_unmasked\": %.3f, \"reduction_percent\": %.1f}\n",
-        p.world.c_str(), p.route.c_str(), static_cast<unsigned long long>(p.seed), p.speed, s.time(), out.scans.size(),
-        guide_frac, tracking_scans ? double(masked_beams) / double(tracking_scans) : 0.0, eo.rmse, eo.mean, eo.max,
+        p.world.c_str(), p.route.c_str(), p.follow ? "follow" : "route", static_cast<unsigned long long>(p.seed), p.speed,
+        s.time(), out.scans.size(), travelled, double(guide_in_field) / n_scans, guide_distance_sum / n_scans,
+        double(stalled_scans) / n_scans, recoveries, guide_frac, tracking_scans ? double(masked_beams) / double(tracking_scans) : 0.0, eo.rmse, eo.mean, eo.max,
         er.rmse, er.mean, er.max, em.rmse, em.mean, em.max, ratio, 100.0 * (1.0 - ratio));
   } else {
-    std::printf("%s / %s, seed %llu: %.0f s, %zu scans, guide tracked and masked in %.0f %% of the scans\n",
-                p.world.c_str(), p.route.c_str(), static_cast<unsigned long long>(p.seed), s.time(), out.scans.size(),
-                100.0 * guide_frac);
+    std::printf("%s / %s, robot %s, seed %llu: %.0f s, %zu scans, robot drove %.1f m, guide in the front field in "
+                "%.0f %% (mean distance %.2f m), tracked and masked in %.0f %% of the scans\n",
+                p.world.c_str(), p.route.c_str(), p.follow ? "follows the guide" : "drives the route",
+                static_cast<unsigned long long>(p.seed), s.time(), out.scans.size(), travelled,
+                100.0 * double(guide_in_field) / n_scans, guide_distance_sum / n_scans, 100.0 * guide_frac);
     std::printf("  position error (ATE RMSE): odometry %.3f m, SLAM unmasked %.3f m, SLAM masked %.3f m (ratio %.2f, "
                 "%.0f %% lower)\n", eo.rmse, er.rmse, em.rmse, ratio, 100.0 * (1.0 - ratio));
   }
@@ -221,8 +319,17 @@ int runMaskBenchVerb(int argc, char** argv) {
     else if (a == "--heading-drift") p.heading_drift = number(value());
     else if (a == "--scale-error") p.scale_error = number(value());
     else if (a == "--max-duration") p.max_duration = number(value());
+    else if (a == "--robot") {
+      const std::string v = value();
+      if (v != "follow" && v != "route") throw InputError("--robot must be follow or route, got '" + v + "'");
+      p.follow = v == "follow";
+    } else if (a == "--keep-spurs") p.keep_spurs = true;
+    else if (a == "--follow-distance") p.follow_distance = number(value());
+    else if (a == "--fov-deg") p.fov_deg = number(value());
     else throw InputError("unknown mask-bench option '" + a + "'");
   }
   if (!(p.speed > 0.05 && p.speed < 3.0)) throw InputError("--speed must be in (0.05, 3) m/s");
+  if (!(p.fov_deg >= 30.0 && p.fov_deg <= 360.0)) throw InputError("--fov-deg must be in [30, 360]");
+  if (!(p.follow_distance > 0.3 && p.follow_distance < 5.0)) throw InputError("--follow-distance must be in (0.3, 5) m");
   return run(p);
 }
