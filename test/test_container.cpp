@@ -17,6 +17,21 @@
 using namespace std::chrono_literals;
 using namespace composition_interfaces::srv;
 
+namespace {
+/// A node in a context of its own, so its service calls cross DDS.
+struct ClientNode {
+  std::shared_ptr<cairn::Context> ctx = cairn::Context::create();
+  cairn::Executor exec;
+  std::unique_ptr<cairn::Node> node;
+  ClientNode() {
+    cairn::NodeOptions o("cli", &exec);
+    o.context = ctx;
+    o.start_parameter_services = false;
+    node = std::make_unique<cairn::Node>(o);
+  }
+};
+}  // namespace
+
 TEST(Container, TalkerAndListenerInOneContainerShareTheMessageObject) {
   auto ctx = cairn::Context::create();
   cairn::Executor exec;
@@ -45,12 +60,8 @@ TEST(Container, LoadListUnloadOverDdsServices) {
   cairn::ComponentManager mgr(ctx, exec, "c2", loader);
   std::thread spinner([&] { exec.spin(); });
 
-  auto cli_ctx = cairn::Context::create();
-  cairn::Executor cli_exec;
-  cairn::NodeOptions o("cli", &cli_exec);
-  o.context = cli_ctx;
-  o.start_parameter_services = false;
-  cairn::Node cli(o);
+  ClientNode client;
+  cairn::Node& cli = *client.node;
   auto load = cli.create_client<LoadNode_Request, LoadNode_Response>("/c2/_container/load_node");
   auto unload = cli.create_client<UnloadNode_Request, UnloadNode_Response>("/c2/_container/unload_node");
   auto list = cli.create_client<ListNodes_Request, ListNodes_Response>("/c2/_container/list_nodes");
@@ -143,12 +154,8 @@ TEST(Container, RestartRestoresTheOriginalLaunchParameters) {
   ASSERT_TRUE(a.ok) << a.error;
   ASSERT_FALSE(mgr.unload(a.unique_id));
 
-  auto cli_ctx = cairn::Context::create();
-  cairn::Executor cli_exec;
-  cairn::NodeOptions o("cli", &cli_exec);
-  o.context = cli_ctx;
-  o.start_parameter_services = false;
-  cairn::Node cli(o);
+  ClientNode client;
+  cairn::Node& cli = *client.node;
   auto load = cli.create_client<LoadNode_Request, LoadNode_Response>("/c5/_container/load_node");
   LoadNode_Request req;  // what a restart knows: class and name, not the parameters
   req.plugin_name = "cairn_demo::Talker";

@@ -394,6 +394,16 @@ cairn::ParameterValue paramOf(Driver& d, const std::string& node, const std::str
   return cairn::from_parameter_msg(r->values[0]);
 }
 
+/// The executive running test/data/monitored_task.xml, watching /chatter's rate and /talker's liveness in `container`.
+cairn::LoadRequest monitoredExecutive(const std::string& container, const std::string& expected_hz) {
+  cairn::LoadRequest req{"cairn_bt::ExecutiveNode", "executive"};
+  req.parameters["tree_file"] = kData + "/monitored_task.xml";
+  req.parameters["tick_rate_hz"] = 20.0;
+  req.parameters["monitor.topics"] = std::vector<std::string>{"/chatter std_msgs/String " + expected_hz + " /talker"};
+  req.parameters["monitor.components"] = std::vector<std::string>{"/talker cairn_demo::Talker " + container};
+  return req;
+}
+
 bool isSkippable(const cairn::LoadResult& r, const std::string& cls) {
   return !r.ok && r.error.find(cls) != std::string::npos &&
          (r.error.find("not found") != std::string::npos || r.error.find("unknown component class") != std::string::npos);
@@ -464,12 +474,7 @@ TEST(BtComponent, MonitorDetectsAKilledComponentTheLadderRestartsItAndTheTaskRes
   ASSERT_TRUE(tl.ok) << tl.error;
 
   Container c;
-  cairn::LoadRequest req{"cairn_bt::ExecutiveNode", "executive"};
-  req.parameters["tree_file"] = kData + "/monitored_task.xml";
-  req.parameters["tick_rate_hz"] = 20.0;
-  req.parameters["monitor.topics"] = std::vector<std::string>{"/chatter std_msgs/String 14 /talker"};
-  req.parameters["monitor.components"] = std::vector<std::string>{"/talker cairn_demo::Talker demo_container"};
-  const auto loaded = c.load(req);
+  const auto loaded = c.load(monitoredExecutive("demo_container", "14"));
   ASSERT_TRUE(loaded.ok) << loaded.error;
   Driver d;
   Texts progress(*d.node, "/bt_test/progress");
@@ -518,11 +523,7 @@ TEST(BtComponent, ResourceAndClockMonitorsAlertAndConfigurationsSelectMonitors) 
   ASSERT_TRUE(tl.ok) << tl.error;
 
   Container c;
-  cairn::LoadRequest req{"cairn_bt::ExecutiveNode", "executive"};
-  req.parameters["tree_file"] = kData + "/monitored_task.xml";
-  req.parameters["tick_rate_hz"] = 20.0;
-  req.parameters["monitor.topics"] = std::vector<std::string>{"/chatter std_msgs/String 20 /talker"};
-  req.parameters["monitor.components"] = std::vector<std::string>{"/talker cairn_demo::Talker res_container"};
+  cairn::LoadRequest req = monitoredExecutive("res_container", "20");
   // RAM error band far below any process (so it must alert once sampled); CPU band out of reach.
   req.parameters["monitor.processes"] = std::vector<std::string>{"res_container 1000 2000 0.001 0.002"};
   req.parameters["monitor.process_sample_ms"] = 100;
