@@ -585,6 +585,7 @@ int run_launch_main(int argc, char** argv) {
         ok = start(rc);
       } catch (const std::exception& e) {
         CAIRN_ERROR(log, "respawn of " << rc.name << " failed: " << e.what());
+        if (rc.pid <= 0) rc.died(std::chrono::steady_clock::now());  // not even started: try again after the backoff
       }
       if (!ok) CAIRN_ERROR(log, "container " << rc.name << " could not be restarted");
     }
