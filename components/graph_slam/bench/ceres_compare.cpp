@@ -587,11 +587,12 @@ int main(int argc, char** argv) {
     if (chordal) std::printf("  certified global optimum (SE-Sync certificate): from chordal init %s\n", cert_chordal.c_str());
     if (profile) {
       std::printf("  cairn phases (last run) [s]: structure %.4f linearize %.4f factorize %.4f solve %.4f evaluate %.4f"
-                  " other %.4f; %d factorizations, factor nnz %.0f, %.3g flop each\n",
+                  " other %.4f; %d factorizations%s, factor nnz %.0f, %.3g flop each\n",
                   cs.time_structure_s, cs.time_linearize_s, cs.time_factorize_s, cs.time_solve_s, cs.time_evaluate_s,
                   cs.time_s - cs.time_structure_s - cs.time_linearize_s - cs.time_factorize_s - cs.time_solve_s -
                       cs.time_evaluate_s,
-                  cs.numeric_factorizations, cs.factor_nonzeros, cs.factor_flops);
+                  cs.numeric_factorizations, cs.factorization_replayed ? " (replayed LDL^T)" : "", cs.factor_nonzeros,
+                  cs.factor_flops);
     }
     std::fflush(stdout);
   }

@@ -145,6 +145,10 @@ void BlockSystem::build(const PoseGraph& graph, std::optional<std::size_t> gauge
   for (std::size_t fi = 0; fi < factors.size(); ++fi) {
     const Factor& f = factors[fi];
     FactorSlots& s = slots_[fi];
+    if (f.kind == FactorKind::kBetween2) {
+      s.cz = std::cos(f.z2.theta);
+      s.sz = std::sin(f.z2.theta);
+    }
     const int na = arity(f.kind);
     int blk[2] = {-1, -1};
     for (int a = 0; a < na; ++a) {
@@ -248,14 +252,15 @@ double finish(const Factor& f, const FactorSlots& s, const Linearized<R, A, B>& 
   return rho;
 }
 
-double linearizeFactor(const Factor& f, const FactorSlots& s, const std::vector<Variable>& x, const int* colp,
-                       double* hx, double* g, double* chi2) {
+double linearizeFactor(const Factor& f, const FactorSlots& s, const std::vector<Variable>& x,
+                       const Eigen::Vector2d* trig, const int* colp, double* hx, double* g, double* chi2) {
   const Variable& a = x[f.var[0]];
   switch (f.kind) {
     case FactorKind::kBetween2: {
       Linearized<3, 3, 3> l;
       Eigen::Matrix3d ja, jb;
-      l.e = errorBetween2(a.pose2, x[f.var[1]].pose2, f.z2, &ja, &jb);
+      const Eigen::Vector2d& ti = trig[f.var[0]];
+      l.e = errorBetween2(a.pose2, x[f.var[1]].pose2, f.z2, ti.x(), ti.y(), s.cz, s.sz, &ja, &jb);
       l.ja = ja;
       l.jb = jb;
       return finish(f, s, l, colp, hx, g, chi2);
@@ -295,12 +300,15 @@ double linearizeFactor(const Factor& f, const FactorSlots& s, const std::vector<
   return 0.0;
 }
 
-double evaluateFactor(const Factor& f, const std::vector<Variable>& x, double* chi2) {
+double evaluateFactor(const Factor& f, const FactorSlots& s, const std::vector<Variable>& x,
+                      const Eigen::Vector2d* trig, double* chi2) {
   double raw = 0.0;
   // Fixed-size paths for the relative-pose factors (the bulk of every benchmark graph; trial steps, the step
   // extension and the dogleg look-ahead evaluate the cost often); the generic path for the rest.
   if (f.kind == FactorKind::kBetween2) {
-    const Eigen::Vector3d e = errorBetween2(x[f.var[0]].pose2, x[f.var[1]].pose2, f.z2, nullptr, nullptr);
+    const Eigen::Vector2d& ti = trig[f.var[0]];
+    const Eigen::Vector3d e =
+        errorBetween2(x[f.var[0]].pose2, x[f.var[1]].pose2, f.z2, ti.x(), ti.y(), s.cz, s.sz, nullptr, nullptr);
     raw = e.dot(f.information.topLeftCorner<3, 3>() * e);
   } else if (f.kind == FactorKind::kBetween3) {
     const Vector6d e = errorBetween3(x[f.var[0]].pose3, x[f.var[1]].pose3, f.z3, nullptr, nullptr);
@@ -337,8 +345,22 @@ void parallelRanges(std::size_t count, int threads, Body&& body) {
 
 }  // namespace
 
+void computeHeadingTrig(const std::vector<Variable>& values, HeadingTrig& out) {
+  out.resize(values.size());
+  for (std::size_t v = 0; v < values.size(); ++v) {
+    const double th = values[v].pose2.theta;
+    out[v] = values[v].kind == VariableKind::kPose2 ? Eigen::Vector2d(std::cos(th), std::sin(th))
+                                                     : Eigen::Vector2d::Zero();
+  }
+}
+
 double BlockSystem::linearize(const PoseGraph& graph, const std::vector<Variable>& values, Eigen::VectorXd& grad,
-                              int threads, double* chi2) {
+                              int threads, double* chi2, const HeadingTrig* trig) {
+  if (trig == nullptr) {
+    computeHeadingTrig(values, trig_scratch_);
+    trig = &trig_scratch_;
+  }
+  const Eigen::Vector2d* tr = trig->data();
   const auto& factors = graph.factors();
   const int nnz = n_ > 0 ? chol_.colPtr()[n_] : 0;
   const int* colp = n_ > 0 ? chol_.colPtr() : nullptr;
@@ -363,7 +385,9 @@ double BlockSystem::linearize(const PoseGraph& graph, const std::vector<Variable
     }
     used[t] = 1;
     double cc = 0.0, chi = 0.0;
-    for (std::size_t fi = b; fi < e; ++fi) cc += linearizeFactor(factors[fi], slots_[fi], values, colp, hx, g, &chi);
+    for (std::size_t fi = b; fi < e; ++fi) {
+      cc += linearizeFactor(factors[fi], slots_[fi], values, tr, colp, hx, g, &chi);
+    }
     cost[t] = cc;
     c2[t] = chi;
   });
@@ -380,13 +404,15 @@ double BlockSystem::linearize(const PoseGraph& graph, const std::vector<Variable
 }
 
 double BlockSystem::evaluate(const PoseGraph& graph, const std::vector<Variable>& values, int threads,
-                             double* chi2) const {
+                             double* chi2, HeadingTrig& trig) const {
+  computeHeadingTrig(values, trig);
+  const Eigen::Vector2d* tr = trig.data();
   const auto& factors = graph.factors();
   const int nt = std::max(1, threads);
   std::vector<double> cost(nt, 0.0), c2(nt, 0.0);
   parallelRanges(factors.size(), nt, [&](int t, std::size_t b, std::size_t e) {
     double cc = 0.0, chi = 0.0;
-    for (std::size_t fi = b; fi < e; ++fi) cc += evaluateFactor(factors[fi], values, &chi);
+    for (std::size_t fi = b; fi < e; ++fi) cc += evaluateFactor(factors[fi], slots_[fi], values, tr, &chi);
     cost[t] = cc;
     c2[t] = chi;
   });

@@ -6,9 +6,13 @@ namespace cairn::graph_slam {
 
 Eigen::Vector3d errorBetween2(const Pose2& xi, const Pose2& xj, const Pose2& z, Eigen::Matrix3d* jac_i,
                               Eigen::Matrix3d* jac_j) {
+  return errorBetween2(xi, xj, z, std::cos(xi.theta), std::sin(xi.theta), std::cos(z.theta), std::sin(z.theta), jac_i,
+                       jac_j);
+}
+
+Eigen::Vector3d errorBetween2(const Pose2& xi, const Pose2& xj, const Pose2& z, double ci, double si, double cz,
+                              double sz, Eigen::Matrix3d* jac_i, Eigen::Matrix3d* jac_j) {
   // Stüde eq. 3.3 in SE(2): relative pose Xi^-1 Xj, then the measurement removed: Z^-1 (Xi^-1 Xj).
-  const double ci = std::cos(xi.theta), si = std::sin(xi.theta);
-  const double cz = std::cos(z.theta), sz = std::sin(z.theta);
   const Eigen::Vector2d d = xj.t - xi.t;
   const Eigen::Vector2d t_ij(ci * d.x() + si * d.y(), -si * d.x() + ci * d.y());  // Ri^T d
   const Eigen::Vector2d u = t_ij - z.t;

@@ -44,6 +44,7 @@ struct Optimizer::Impl {
 
   bool ensureStructure(const PoseGraph& graph, const OptimizerOptions& o) {
     system.cholesky().setMaxThreads(o.factorization_threads);
+    system.cholesky().setReplayDisabled(!o.factorization_replay);
     if (built && built_version == graph.structureVersion()) return false;
     gauge = automaticGauge(graph);
     const int before = system.cholesky().symbolicAnalyses();
@@ -113,7 +114,17 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   Eigen::VectorXd grad(n), step(n), hdiag(n), dscale(n), tmp(n);
 
   double chi2 = 0.0;
-  auto linearize = [&] { return timed(sum.time_linearize_s, [&] { return sys.linearize(graph, x, grad, threads, &chi2); }); };
+  // Heading cos/sin of x, of the trial state and of an extended / look-ahead state: evaluate() fills them and
+  // the accepted state's are reused by linearize(), so each state's trigonometry is computed once.
+  detail::HeadingTrig trig_x, trig_trial, trig_ext;
+  detail::computeHeadingTrig(x, trig_x);
+  auto linearize = [&] {
+    return timed(sum.time_linearize_s, [&] { return sys.linearize(graph, x, grad, threads, &chi2, &trig_x); });
+  };
+  auto adopt_extended = [&] {
+    trial.swap(extended);
+    trig_trial.swap(trig_ext);
+  };
   auto factorize = [&] { return timed(sum.time_factorize_s, [&] { return im.factorize(); }); };
   auto solve = [&](const Eigen::VectorXd& b, Eigen::VectorXd& out) {
     timed(sum.time_solve_s, [&] { sys.cholesky().solve(b.data(), out.data()); });
@@ -150,27 +161,38 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   double x_norm = stateNorm(x);
   // Dogleg state: Gauss-Newton step and Cauchy point for the current linearization.
   bool need_solve = true;
-  Eigen::VectorXd h_gn(n), h_sd(n), dsq(n);
+  Eigen::VectorXd h_gn(n), h_sd(n), dsq(n), gscaled(n);
   double step_norm_scaled = 0.0;
+  // Per linearization (both ends of the dogleg path are fixed, only the radius varies between trial and
+  // look-ahead steps): scaled lengths of both ends and the segment d = h_gn - h_sd with c = <D h_sd, D d>,
+  // dd = |D d|^2, computed once in dogleg_prepare() instead of at every dogleg step.
+  double gn_norm = 0.0, sd_norm = 0.0, seg_c = 0.0, seg_dd = 0.0;
+  Eigen::VectorXd seg(n);
+  auto dogleg_prepare = [&] {
+    gn_norm = h_gn.cwiseProduct(dsq).norm();
+    sd_norm = h_sd.cwiseProduct(dsq).norm();
+    seg = h_gn - h_sd;
+    seg_c = h_sd.cwiseProduct(dsq).dot(seg.cwiseProduct(dsq));
+    seg_dd = seg.cwiseProduct(dsq).squaredNorm();
+  };
   // Powell's dogleg step for trust-region radius r (scaled norm |D h|) into out; returns its kind.
   auto doglegStep = [&](double r, Eigen::VectorXd& out) -> const char* {
-    const double gn_norm = h_gn.cwiseProduct(dsq).norm();
-    const double sd_norm = h_sd.cwiseProduct(dsq).norm();
     if (gn_norm <= r) {
       out = h_gn;
       return " gn";
     }
     if (sd_norm >= r || sd_norm == 0.0) {
-      out = sd_norm > 0.0 ? Eigen::VectorXd(h_sd * (r / sd_norm)) : Eigen::VectorXd(h_gn * (r / gn_norm));
+      if (sd_norm > 0.0) {
+        out = h_sd * (r / sd_norm);
+      } else {
+        out = h_gn * (r / gn_norm);
+      }
       return " cauchy";
     }
     // Where the segment Cauchy point -> GN step leaves the (scaled) trust region.
-    const Eigen::VectorXd d = h_gn - h_sd;
-    const Eigen::VectorXd ds = d.cwiseProduct(dsq);
-    const double c = h_sd.cwiseProduct(dsq).dot(ds), dd = ds.squaredNorm();
-    const double disc = c * c + dd * (r * r - sd_norm * sd_norm);
-    const double beta = (-c + std::sqrt(std::max(0.0, disc))) / dd;
-    out = h_sd + beta * d;
+    const double disc = seg_c * seg_c + seg_dd * (r * r - sd_norm * sd_norm);
+    const double beta = (-seg_c + std::sqrt(std::max(0.0, disc))) / seg_dd;
+    out = h_sd + beta * seg;
     return " dogleg";
   };
 
@@ -262,15 +284,17 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
         // rotations and translations of very different stiffness then get comparable step lengths.
         dsq = dscale.cwiseSqrt();
         set_damping(0.0);
-        const Eigen::VectorXd v = grad.cwiseQuotient(dscale);  // D^-2 g
-        multiply(v, tmp);
-        const double vHv = v.dot(tmp);
+        gscaled = grad.cwiseQuotient(dscale);  // D^-2 g
+        multiply(gscaled, tmp);
+        const double vHv = gscaled.dot(tmp);
         // Cauchy point in scaled coordinates: minimizer of the model along -D^-2 g.
-        const double alpha = vHv > 0.0 ? grad.dot(v) / vHv : 0.0;
-        h_sd = -alpha * v;
+        const double alpha = vHv > 0.0 ? grad.dot(gscaled) / vHv : 0.0;
+        h_sd = -alpha * gscaled;
         bool ok = factorize();
+        bool damped = false;
         for (double mu = 1e-12; !ok && mu < 1e32; mu *= 100.0) {
           set_damping(mu);
+          damped = true;
           ok = factorize();
         }
         if (!ok) {
@@ -279,7 +303,8 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
         }
         solve(grad, h_gn);
         h_gn = -h_gn;
-        set_damping(0.0);
+        if (damped) set_damping(0.0);
+        dogleg_prepare();
         need_solve = false;
       }
       step_kind = doglegStep(radius, step);
@@ -296,9 +321,9 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
     }
     sys.retract(x, step, trial);
     double new_chi2 = 0.0;
-    double new_cost = timed(sum.time_evaluate_s, [&] { return sys.evaluate(graph, trial, threads, &new_chi2); });
+    double new_cost = timed(sum.time_evaluate_s, [&] { return sys.evaluate(graph, trial, threads, &new_chi2, trig_trial); });
     if (options_.dogleg_lookahead > 0 && options_.algorithm == Algorithm::kDogleg && !chord &&
-        h_gn.cwiseProduct(dsq).norm() > radius && std::isfinite(new_cost) && new_cost < cost) {
+        gn_norm > radius && std::isfinite(new_cost) && new_cost < cost) {
       // Trust-region look-ahead: the step was truncated by the region and still lowered the cost. Both ends
       // of the dogleg path are already solved for, so the steps for 2x, 4x, ... the radius (up to the
       // Gauss-Newton step) cost one cost evaluation each (~1 % of a factorization on the 3D sets); the
@@ -313,10 +338,10 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
         sys.retract(x, cand, extended);
         double c_chi2 = 0.0;
         const double c_cost =
-            timed(sum.time_evaluate_s, [&] { return sys.evaluate(graph, extended, threads, &c_chi2); });
+            timed(sum.time_evaluate_s, [&] { return sys.evaluate(graph, extended, threads, &c_chi2, trig_ext); });
         if (!(c_cost < new_cost)) break;
         step.swap(cand);
-        trial.swap(extended);
+        adopt_extended();
         new_cost = c_cost;
         new_chi2 = c_chi2;
         step_kind = kind;
@@ -400,18 +425,18 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
         sys.retract(x, next * step, extended);
         double ext_chi2 = 0.0;
         const double ext_cost =
-            timed(sum.time_evaluate_s, [&] { return sys.evaluate(graph, extended, threads, &ext_chi2); });
+            timed(sum.time_evaluate_s, [&] { return sys.evaluate(graph, extended, threads, &ext_chi2, trig_ext); });
         if (!(ext_cost < best_cost)) {
           // Overshot: retry once at the geometric mean of the last good and the failed length.
           if (k + 1 < options_.step_extension && next > 3.0 * alpha) {
             sys.retract(x, std::sqrt(next * alpha) * step, extended);
             const double mid_cost =
-                timed(sum.time_evaluate_s, [&] { return sys.evaluate(graph, extended, threads, &ext_chi2); });
+                timed(sum.time_evaluate_s, [&] { return sys.evaluate(graph, extended, threads, &ext_chi2, trig_ext); });
             if (mid_cost < best_cost) {
               best_cost = mid_cost;
               best_chi2 = ext_chi2;
               alpha = std::sqrt(next * alpha);
-              trial.swap(extended);
+              adopt_extended();
             }
           }
           break;
@@ -419,7 +444,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
         best_cost = ext_cost;
         best_chi2 = ext_chi2;
         alpha = next;
-        trial.swap(extended);
+        adopt_extended();
       }
       if (options_.trace && alpha > 1.0) {
         std::fprintf(stderr, "          extended x%.3g: cost %.12g\n", alpha, best_cost);
@@ -433,6 +458,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
 
     ++sum.accepted_steps;
     x.swap(trial);
+    trig_x.swap(trig_trial);
     x_norm = stateNorm(x);
     const double rel = (cost - best_cost) / std::max(cost, std::numeric_limits<double>::min());
     const double decrease = cost - best_cost;
@@ -479,6 +505,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   sum.numeric_factorizations = im.numeric_total;
   sum.factor_nonzeros = n > 0 ? sys.cholesky().factorNonzeros() : 0.0;
   sum.factor_flops = n > 0 ? sys.cholesky().factorFlops() : 0.0;
+  sum.factorization_replayed = n > 0 && options_.factorization_replay && sys.cholesky().replayActive();
   sum.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sum;
 }

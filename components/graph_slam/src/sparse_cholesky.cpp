@@ -1,6 +1,7 @@
 #include "sparse_cholesky.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -88,13 +89,121 @@ void SparseCholesky::analyze(bool natural_ordering, int kind) {
   l_ = cholmod_analyze(a_, &common_);
   if (l_ == nullptr) throw std::runtime_error("CHOLMOD: symbolic analysis failed");
   ++symbolic_analyses_;
+  replay_ready_ = false;
+  replay_failed_ = false;
 }
 
 bool SparseCholesky::factorize() {
   ++numeric_factorizations_;
+  if (replay_ready_ && !replay_off_) return replayFactorize();
   const OmpThreadCap cap(max_threads_);
   const int ok = cholmod_factorize(a_, l_, &common_);
-  return ok != 0 && common_.status == CHOLMOD_OK && l_->minor == l_->n;
+  const bool success = ok != 0 && common_.status == CHOLMOD_OK && l_->minor == l_->n;
+  if (success && !replay_ready_ && !replay_failed_ && !replay_off_) {
+    replay_ready_ = recordReplay();
+    replay_failed_ = !replay_ready_;
+  }
+  return success;
+}
+
+// Records the row patterns of CHOLMOD's up-looking simplicial LDL^T factorization (cholmod_rowfac) of the
+// upper-stored matrix in natural order: row k of L is reached from the entries of column k of A by walking the
+// elimination tree up to k, each walk's path pushed onto a stack, and the stack processed top down. Then
+// replays the factorization once on the current matrix and compares it bit for bit with CHOLMOD's factor.
+bool SparseCholesky::recordReplay() {
+  if (l_->is_super || l_->is_ll || l_->xtype != CHOLMOD_REAL || a_->stype <= 0 || !a_->packed || !a_->sorted ||
+      l_->ordering != CHOLMOD_NATURAL) {
+    return false;
+  }
+  const int n = static_cast<int>(l_->n);
+  const int* ap = static_cast<const int*>(a_->p);
+  const int* ai = static_cast<const int*>(a_->i);
+  const int* lp = static_cast<const int*>(l_->p);
+  const int* li = static_cast<const int*>(l_->i);
+  const int* lnz = static_cast<const int*>(l_->nz);
+  std::vector<int> parent(n), flag(n, -1), stack(n), count(n, 1);
+  for (int j = 0; j < n; ++j) parent[j] = lnz[j] > 1 ? li[lp[j] + 1] : -1;
+  replay_ptr_.assign(1, 0);
+  replay_i_.clear();
+  replay_pos_.clear();
+  for (int k = 0; k < n; ++k) {
+    int top = n;
+    flag[k] = k;
+    for (int p = ap[k]; p < ap[k + 1]; ++p) {
+      int len = 0;
+      for (int i = ai[p]; i < k && i >= 0 && flag[i] != k; i = parent[i]) {
+        stack[len++] = i;
+        flag[i] = k;
+      }
+      while (len > 0) stack[--top] = stack[--len];
+    }
+    for (; top < n; ++top) {
+      const int i = stack[top];
+      const int pos = lp[i] + count[i]++;
+      if (count[i] > lnz[i] || li[pos] != k) return false;  // not CHOLMOD's pattern
+      replay_i_.push_back(i);
+      replay_pos_.push_back(pos);
+    }
+    replay_ptr_.push_back(static_cast<int>(replay_i_.size()));
+  }
+  for (int j = 0; j < n; ++j) {
+    if (count[j] != lnz[j]) return false;
+  }
+  // Self-check: the replay must reproduce CHOLMOD's factor exactly.
+  double* lx = static_cast<double*>(l_->x);
+  std::vector<double> reference(lx, lx + lp[n]);
+  replay_work_.assign(n, 0.0);
+  const bool ok = replayFactorize();
+  bool same = ok;
+  for (int j = 0; same && j < n; ++j) {
+    same = std::memcmp(lx + lp[j], reference.data() + lp[j], sizeof(double) * lnz[j]) == 0;
+  }
+  if (!same) std::copy(reference.begin(), reference.end(), lx);
+  l_->minor = l_->n;
+  return same;
+}
+
+// The numeric part of cholmod_rowfac's real LDL^T case on the recorded patterns: for each row k, scatter column
+// k of A into W; for each i of the row pattern in order: y = W(i), W(rows of L(:,i) above k) -= L(.,i) y,
+// L(k,i) = y / D(i), D(k) -= L(k,i) y. A pivot D(k) that is not positive and finite fails, as for LL^T.
+bool SparseCholesky::replayFactorize() {
+  const int n = static_cast<int>(l_->n);
+  const int* ap = static_cast<const int*>(a_->p);
+  const int* ai = static_cast<const int*>(a_->i);
+  const double* ax = static_cast<const double*>(a_->x);
+  const int* lp = static_cast<const int*>(l_->p);
+  const int* li = static_cast<const int*>(l_->i);
+  double* lx = static_cast<double*>(l_->x);
+  double* w = replay_work_.data();
+  const int* ri = replay_i_.data();
+  const int* rpos = replay_pos_.data();
+  for (int k = 0; k < n; ++k) {
+    for (int p = ap[k]; p < ap[k + 1]; ++p) {
+      if (ai[p] <= k) w[ai[p]] = ax[p];
+    }
+    double dk = w[k];
+    w[k] = 0.0;
+    for (int t = replay_ptr_[k]; t < replay_ptr_[k + 1]; ++t) {
+      const int i = ri[t];
+      const int pos = rpos[t];
+      const double yi = w[i];
+      w[i] = 0.0;
+      const int p0 = lp[i];
+      for (int q = p0 + 1; q < pos; ++q) w[li[q]] -= lx[q] * yi;
+      const double lki = yi / lx[p0];
+      dk -= lki * yi;
+      lx[pos] = lki;
+    }
+    if (!(dk > 0.0) || !std::isfinite(dk)) {
+      // Leave W clean for the next call; the factor is invalid (as after a failed CHOLMOD factorization).
+      std::fill(replay_work_.begin(), replay_work_.end(), 0.0);
+      l_->minor = static_cast<size_t>(k);
+      return false;
+    }
+    lx[lp[k]] = dk;
+  }
+  l_->minor = l_->n;
+  return true;
 }
 
 void SparseCholesky::solve(const double* b, double* x, int ncols) {

@@ -32,8 +32,17 @@ class SparseCholesky {
   /// kind: 0 auto, 1 simplicial, 2 supernodal.
   void analyze(bool natural_ordering, int kind = 0);
   bool analyzed() const { return l_ != nullptr; }
-  /// Numeric factorization; false if the matrix is not positive definite.
+  /// Numeric factorization; false if the matrix is not positive definite. For a simplicial LDL^T factor
+  /// (CHOLMOD's choice on small, very sparse systems such as MIT's) the first successful factorization after
+  /// analyze() records CHOLMOD's row patterns (the elimination-tree walks its up-looking factorization repeats
+  /// for every row at every call); later calls replay exactly the same floating-point operations in the same
+  /// order on the recorded patterns, so the factor is bit-identical to CHOLMOD's (checked against CHOLMOD's own
+  /// result when the patterns are recorded; any mismatch disables the replay for this analysis).
   bool factorize();
+  /// The replay described at factorize() is active (diagnostic / tests).
+  bool replayActive() const { return replay_ready_; }
+  /// Turns the replay off (true) or back on (false, the default).
+  void setReplayDisabled(bool disabled) { replay_off_ = disabled; }
   /// Upper bound on the OpenMP threads CHOLMOD's supernodal kernels may use (>= 1). CHOLMOD 3 hard-codes
   /// num_threads(4) in its assembly loops; the cap is applied around each call through the OpenMP runtime's
   /// dynamic adjustment (no effect when CHOLMOD was built without OpenMP).
@@ -53,6 +62,8 @@ class SparseCholesky {
 
  private:
   void freeWork();
+  bool recordReplay();
+  bool replayFactorize();
   cholmod_common common_;
   cholmod_sparse* a_ = nullptr;
   cholmod_factor* l_ = nullptr;
@@ -60,6 +71,14 @@ class SparseCholesky {
   cholmod_dense* y_ = nullptr;
   cholmod_dense* e_ = nullptr;
   int max_threads_ = 1;
+  // Replay of CHOLMOD's simplicial LDL^T factorization: for row k, the columns i of L with L(k,i) != 0 in the
+  // order CHOLMOD processes them (replay_i_[replay_ptr_[k] .. replay_ptr_[k+1])) and the position of L(k,i)
+  // in L->x (replay_pos_).
+  bool replay_ready_ = false;
+  bool replay_failed_ = false;
+  bool replay_off_ = false;
+  std::vector<int> replay_ptr_, replay_i_, replay_pos_;
+  std::vector<double> replay_work_;
   int symbolic_analyses_ = 0;
   int numeric_factorizations_ = 0;
 };

@@ -14,6 +14,11 @@ namespace cairn::graph_slam {
 /// Relative SE2 pose factor.
 Eigen::Vector3d errorBetween2(const Pose2& xi, const Pose2& xj, const Pose2& z, Eigen::Matrix3d* jac_i,
                               Eigen::Matrix3d* jac_j);
+/// The same with cos/sin of xi.theta (ci, si) and of z.theta (cz, sz) supplied by the caller: the optimizer
+/// computes them once per state and once per factor instead of per factor and evaluation (same values, so
+/// the result is bit-identical to the overload above).
+Eigen::Vector3d errorBetween2(const Pose2& xi, const Pose2& xj, const Pose2& z, double ci, double si, double cz,
+                              double sz, Eigen::Matrix3d* jac_i, Eigen::Matrix3d* jac_j);
 /// Relative SE3 pose factor.
 Vector6d errorBetween3(const Pose3& xi, const Pose3& xj, const Pose3& z, Matrix6d* jac_i, Matrix6d* jac_j);
 /// Pose priors: the relative factor with Xi = identity, e = pi(Z^-1 * X).

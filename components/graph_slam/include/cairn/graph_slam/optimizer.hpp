@@ -79,6 +79,12 @@ struct OptimizerOptions {
   /// made the factorizations cost more than that (README "Incremental use").
   bool incremental_ordering = false;
   double incremental_fill_tolerance = 0.3;
+  /// Where CHOLMOD picks a simplicial LDL^T factor (small, very sparse systems: MIT, Intel, M3500), replay its
+  /// numeric factorization on row patterns recorded once per symbolic analysis instead of letting CHOLMOD
+  /// recompute them (its up-looking method walks the elimination tree for every row at every call). The same
+  /// floating-point operations in the same order, so results are bit-identical (checked against CHOLMOD's
+  /// factor when recording; a mismatch falls back to CHOLMOD). MIT: factorization time -70 %.
+  bool factorization_replay = true;
   /// Print one line per iteration (cost, step, damping / radius) to stderr.
   bool trace = false;
 };
@@ -110,6 +116,7 @@ struct OptimizerSummary {
   int numeric_factorizations = 0;      ///< cumulative over the optimizer's life
   double factor_nonzeros = 0.0;        ///< nonzeros of the Cholesky factor (fill-in diagnostic)
   double factor_flops = 0.0;           ///< floating-point operations of one numeric factorization
+  bool factorization_replayed = false; ///< numeric factorizations were replayed (factorization_replay)
   std::optional<VariableId> gauge;     ///< variable held fixed automatically (nothing fixed, no priors)
 };
 
