@@ -385,11 +385,13 @@ CertificateResult certify(const PoseGraph& graph, const CertificateOptions& opt,
   const Eigen::MatrixXd yt = prob.yTransposed(x);
   const Eigen::MatrixXd myt = s.template selfadjointView<Eigen::Upper>() * yt;  // (Y M)^T
   Eigen::MatrixXd lambda_yt = Eigen::MatrixXd::Zero(yt.rows(), D);             // (Y Lambda)^T
+  res.dual_bound = 0.0;
   for (int k = 0; k < prob.n; ++k) {
     const int o = prob.rIdx(k);
     const typename P::Rot ymr = myt.block(o, 0, D, D).transpose();  // (Y M)_{R_k}
     const typename P::Rot rm = x.r[k].transpose() * ymr;
     const typename P::Rot lam = 0.5 * (rm + rm.transpose());
+    res.dual_bound += lam.trace();
     lambda_yt.block(o, 0, D, D) = (x.r[k] * lam).transpose();
     for (int c = 0; c < D; ++c) {
       for (int r = 0; r <= c; ++r) s.coeffRef(o + r, o + c) -= lam(r, c);

@@ -148,6 +148,23 @@ TEST(Certificate, Noisy2dSolutionOfTheOptimizerIsCertified) {
   EXPECT_LT(r.objective, 1.05 * r.objective_input);  // cairn's chi2 minimizer is close to f's
   EXPECT_LT(r.stationarity, 1e-8);
   EXPECT_GT(r.lambda_deflated, 0.0);
+  EXPECT_NEAR(r.dual_bound, r.objective, 1e-8 * r.objective);  // zero duality gap at the certified optimum
+}
+
+TEST(Certificate, DualBoundHoldsShortOfACriticalPoint) {
+  // Two LM solves from a perturbed noisy start: not yet critical, but where S ⪰ 0 the dual bound is below the
+  // optimum reached by the full refinement.
+  const gs::PoseGraph g = ring2d(40, true, 0.05, 0, 0.05, 9);
+  gs::CertificateOptions few;
+  few.max_iterations = 2;
+  const gs::CertificateResult partial = gs::certifyGlobalOptimum(g, few);
+  const gs::CertificateResult full = gs::certifyGlobalOptimum(g);
+  ASSERT_TRUE(full.certified);
+  EXPECT_FALSE(partial.refine_converged);
+  EXPECT_GT(partial.objective, full.objective);
+  EXPECT_TRUE(partial.certified) << partial.lambda_min;
+  EXPECT_LE(partial.dual_bound, full.objective);
+  EXPECT_LT(partial.dual_bound, partial.objective);
 }
 
 TEST(Certificate, TwistedRing2dIsACriticalPointButNotCertified) {
