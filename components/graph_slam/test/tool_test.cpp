@@ -50,6 +50,19 @@ TEST(Tool, OptimizeJsonHasExactlyTheDocumentedKeys) {
   EXPECT_LT(g.chi2(), 600.0);  // optimized values were written
 }
 
+TEST(Tool, OptimizeCertifyAddsTheCertificateObject) {
+  // The documented keys stay first and unchanged; --certify appends one object (intel: certified, see
+  // docs/benchmarks.md "Global optimum").
+  const ToolRun r = run("optimize " + kData + "intel.g2o --json --certify");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::regex re(
+      R"(^\{"vertices":943,"edges":1837,"initial_chi2":[0-9.e+-]+,"final_chi2":[0-9.e+-]+,"iterations":[0-9]+,)"
+      R"("time_s":[0-9.e+-]+,"converged":true,"certificate":\{"certified":true,"sesync_objective":[0-9.e+-]+,)"
+      R"("refined_objective":[0-9.e+-]+,"dual_bound":[0-9.e+-]+,"lambda_min":[0-9.e+-]+,"eta":[0-9.e+-]+,)"
+      R"("refine_iterations":[0-9]+,"refine_converged":true,"time_s":[0-9.e+-]+\}\}\n$)");
+  EXPECT_TRUE(std::regex_match(r.out, re)) << r.out;
+}
+
 TEST(Tool, BadInputGivesFileLineAndExitCode2) {
   const std::string bad = (std::filesystem::temp_directory_path() / "cairn_slam_bad.g2o").string();
   std::ofstream(bad) << "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 -1 0 1\n";
