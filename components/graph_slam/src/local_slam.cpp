@@ -37,6 +37,43 @@ Pose2 LocalSlam::predict(double stamp, const std::optional<Pose2>& odom) const {
   return compose(*last_pose_, delta);
 }
 
+LocalSlam::ActiveMatch LocalSlam::matchActive(const std::vector<Eigen::Vector2d>& pts, const Pose2& predicted) const {
+  const Submap& sm = *active_.front();
+  const Pose2 prior = compose(inverse(sm.local_pose), predicted);
+  Pose2 initial = prior;
+  if (options_.use_correlative) {
+    if (auto m = correlativeMatch(sm.grid, pts, prior, options_.window, options_.min_correlative_score)) initial = m->pose;
+  }
+  RefineResult ref = refine(sm.grid, pts, initial, prior, options_.refine);
+  ActiveMatch out;
+  const bool judged = sm.num_scans >= options_.judge_min_submap_scans;  // a young submap scores low
+  if (judged && ref.score < options_.recovery_score) {
+    // Multi-resolution search over a larger window (Hess et al. 2016 §V-C branch and bound on max-pooled
+    // grids), only when the small-window match is poor: the active submap keeps changing, so its
+    // precomputation is built here, for this scan (a few hundred µs), not kept.
+    const BranchAndBoundMatcher bnb(sm.grid, options_.recovery_depth);
+    if (auto m = bnb.match(pts, prior, options_.recovery_window, ref.score + options_.recovery_min_gain)) {
+      // No odometry prior here: the prediction is what failed (weights as for loop-closure refinement).
+      RefineOptions unanchored = options_.refine;
+      unanchored.translation_weight = unanchored.rotation_weight = 1e-3;
+      unanchored.degenerate_translation_weight = -1.0;
+      const RefineResult again = refine(sm.grid, pts, m->pose, m->pose, unanchored);
+      if (again.score >= ref.score + options_.recovery_min_gain) {
+        ref = again;
+        out.recovered = true;
+      }
+    }
+  }
+  out.unmatched = judged && ref.score < options_.unmatched_score;
+  out.pose = compose(sm.local_pose, ref.pose);
+  // Rotate the covariance from the grid frame into the local frame.
+  Eigen::Matrix3d Rt = Eigen::Matrix3d::Identity();
+  Rt.topLeftCorner<2, 2>() = rotation2(sm.local_pose.theta);
+  out.covariance = Rt * ref.covariance * Rt.transpose();
+  out.score = ref.score;
+  return out;
+}
+
 std::optional<LocalResult> LocalSlam::addScan(double stamp, const RangeData& data, const std::optional<Pose2>& odom) {
   last_error_.clear();
   if (!std::isfinite(stamp)) {
@@ -70,22 +107,23 @@ std::optional<LocalResult> LocalSlam::addScan(double stamp, const RangeData& dat
   const Pose2 predicted = predict(stamp, od);
   Pose2 pose = predicted;
   if (!active_.empty()) {
-    const Submap& sm = *active_.front();
-    const Pose2 to_grid = inverse(sm.local_pose);
-    const Pose2 prior = compose(to_grid, predicted);
-    Pose2 initial = prior;
-    if (options_.use_correlative) {
-      if (auto m = correlativeMatch(sm.grid, r.matching_points, prior, options_.window, options_.min_correlative_score)) {
-        initial = m->pose;
+    ActiveMatch m = matchActive(r.matching_points, predicted);
+    if (!m.unmatched && !held_.empty()) {
+      // The unmatched run ended: the held-back scans go in as they would have (same order, same motion-filter
+      // decisions), and this scan is matched again against the grid they changed — the same result as if they
+      // had never been held back.
+      for (Held& h : held_) {
+        if (h.insert_it) insert(h.result.range_data, h.result.local_pose, h.result);
+        r.flushed.push_back(std::move(h.result));
       }
+      held_.clear();
+      m = matchActive(r.matching_points, predicted);
     }
-    const RefineResult ref = refine(sm.grid, r.matching_points, initial, prior, options_.refine);
-    pose = compose(sm.local_pose, ref.pose);
-    // Rotate the covariance from the grid frame into the local frame.
-    Eigen::Matrix3d Rt = Eigen::Matrix3d::Identity();
-    Rt.topLeftCorner<2, 2>() = rotation2(sm.local_pose.theta);
-    r.covariance = Rt * ref.covariance * Rt.transpose();
-    r.match_score = ref.score;
+    pose = m.pose;
+    r.covariance = m.covariance;
+    r.match_score = m.score;
+    r.recovered = m.recovered;
+    r.unmatched = m.unmatched;
     r.matched = true;
   } else {
     r.covariance = Eigen::Matrix3d::Identity() * 1e-6;
@@ -99,7 +137,21 @@ std::optional<LocalResult> LocalSlam::addScan(double stamp, const RangeData& dat
     insert_it = stamp - last_inserted_stamp_ > options_.motion_max_time || d.t.norm() > options_.motion_min_distance ||
                 std::abs(d.theta) > options_.motion_min_angle;
   }
-  if (insert_it) insert(r.range_data, pose, r);
+  if (r.unmatched && options_.lost_scans > 0) {
+    // Held back (not inserted) until the run of unmatched scans ends: a kidnapped robot must not write the new
+    // place into the old submaps, while an isolated bad scan changes nothing (it is inserted with the next one).
+    if (insert_it) {
+      last_inserted_pose_ = pose;  // the motion filter runs as if it had been inserted
+      last_inserted_stamp_ = stamp;
+    }
+    held_.push_back({r, insert_it});
+    if (static_cast<int>(held_.size()) >= options_.lost_scans) {
+      r.lost = true;
+      held_.clear();
+    }
+  } else if (insert_it) {
+    insert(r.range_data, pose, r);
+  }
 
   // Constant-velocity model from consecutive poses.
   if (last_pose_ && stamp > last_stamp_) {

@@ -62,6 +62,26 @@ void GraphSlam::Impl::startTrajectory() {
   cov_since_loop.setZero();
   pending_global.clear();
   links = 0;
+  trajectory_first_node = nodes.size();
+}
+
+void GraphSlam::Impl::restartLost() {
+  ++stats.lost_events;
+  if (!options.localization_only && last_node) {
+    // The old trajectory stays as it is; its active submaps will never change again, so they are finished
+    // (loop-closure targets from now on). The new trajectory is unlinked until a global search places it.
+    for (SlamSubmap& sm : submaps)
+      if (sm.trajectory == trajectory) sm.finished = true;
+    ++trajectory;
+    startTrajectory();
+  } else {
+    local = std::make_unique<LocalSlam>(options.local);  // localization (or nothing mapped yet): fresh tracker
+    cov_since_loop.setZero();
+    pending_global.clear();
+  }
+  linked = nodes.empty();
+  restart_anchor = current_pose;
+  held_scans.clear();  // LocalSlam discarded the held-back scans
 }
 
 double GraphSlam::Impl::searchRadius() const {
@@ -76,7 +96,21 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
   const auto t0 = Clock::now();
   const RangeData data = toRangeData(scan, options.sensor_in_base, options.local.filter);
   std::optional<LocalResult> r = local->addScan(scan.stamp, data, odom);
+  if (r) {
+    stats.local_recoveries += r->recovered ? 1 : 0;
+    stats.scans_unmatched += r->unmatched ? 1 : 0;
+  }
+  if (r && r->lost) {
+    // Kidnapped, or the world is not where odometry says: this scan starts over (Stüde §3.2.1 global search).
+    restartLost();
+    r = local->addScan(scan.stamp, data, odom);
+  }
   stats.local_time_s += seconds(t0);
+  if (r && restart_anchor) {
+    // Keep the map pose continuous across the restart (the new local frame starts at this scan).
+    map_to_local = compose(*restart_anchor, inverse(r->local_pose));
+    restart_anchor.reset();
+  }
   if (!r) {
     ++stats.scans_rejected;
     last_error = local->lastError();
@@ -84,24 +118,17 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
   }
   ScanUpdate update;
   if (initial_pose) applyInitialPose(r->local_pose);
+  // Held-back scans that went in now become nodes first, as if they had not been held back.
+  if (!r->flushed.empty() && r->flushed.size() == held_scans.size() && !options.localization_only)
+    for (std::size_t i = 0; i < r->flushed.size(); ++i)
+      if (r->flushed[i].inserted) takeNode(r->flushed[i], held_scans[i], update);
+  if (!r->flushed.empty()) held_scans.clear();
+  if (r->unmatched) held_scans.push_back(scan);
   if (options.localization_only) {
     localizeScan(*r, scan, update);
     return update;
   }
-  if (r->inserted || !last_node) {
-    const std::int64_t id = addNode(*r, scan);
-    update.node_added = true;
-    update.node = id;
-    if (options.loop_closure && (static_cast<int>(nodes.size()) % std::max(1, options.loop_node_stride) == 0 || !linked)) {
-      update.loops_added = searchLoops(id);
-    }
-    for (const auto& s : local->takeNewlyFinished()) submaps[static_cast<std::size_t>(submap_base + s->index)].finished = true;
-    if (update.loops_added > 0 ||
-        (options.optimize_every_n_nodes > 0 && nodes_since_optimize >= options.optimize_every_n_nodes)) {
-      optimize();
-      update.optimized = true;
-    }
-  }
+  if (r->inserted || !last_node) takeNode(*r, scan, update);
   const SlamNode& n = nodes[static_cast<std::size_t>(*last_node)];
   const Pose2 rel = between(n.local_pose, r->local_pose);
   records.push_back({scan.stamp, n.id, rel});
@@ -111,6 +138,23 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
   update.covariance = cov_since_loop;
   update.localized = linked;
   return update;
+}
+
+void GraphSlam::Impl::takeNode(const LocalResult& r, const sim::LaserScan& scan, ScanUpdate& update) {
+  const std::int64_t id = addNode(r, scan);
+  update.node_added = true;
+  update.node = id;
+  int added = 0;
+  if (options.loop_closure && (static_cast<int>(nodes.size()) % std::max(1, options.loop_node_stride) == 0 || !linked)) {
+    added = searchLoops(id);
+    update.loops_added += added;
+  }
+  for (const auto& s : local->takeNewlyFinished()) submaps[static_cast<std::size_t>(submap_base + s->index)].finished = true;
+  if (added > 0 ||
+      (options.optimize_every_n_nodes > 0 && nodes_since_optimize >= options.optimize_every_n_nodes)) {
+    optimize();
+    update.optimized = true;
+  }
 }
 
 void GraphSlam::Impl::applyInitialPose(const Pose2& local_pose) {
@@ -468,9 +512,13 @@ int GraphSlam::Impl::searchLoops(std::int64_t id) {
           graph.setPose2(t.id, t.global_pose);
         }
       for (const LoopMatch& m : agreeing) addLoopEdge(m.query, m);
+      if (std::getenv("CAIRN_SLAM_DEBUG") != nullptr)
+        std::fprintf(stderr, "global link node %ld t=%.1f -> (%.2f,%.2f,%.2f) agreeing %zu\n", static_cast<long>(id), n.stamp,
+                     nodes[static_cast<std::size_t>(id)].global_pose.t.x(), nodes[static_cast<std::size_t>(id)].global_pose.t.y(),
+                     nodes[static_cast<std::size_t>(id)].global_pose.theta, agreeing.size());
       ++links;
       added = 1;
-      const double alpha = static_cast<double>(nodes.size() - loaded_nodes) / static_cast<double>(nodes.size());
+      const double alpha = static_cast<double>(nodes.size() - trajectory_first_node) / static_cast<double>(nodes.size());
       if (links >= options.n_start || alpha >= options.alpha_min) linked = true;
       pending_global.clear();
       cov_since_loop.setZero();

@@ -73,7 +73,9 @@ struct GraphSlam::Impl {
   std::vector<LoopMatch> pending_global;  ///< unverified global detections (Stüde n_ver rule)
   std::vector<LoopMatch> pending_local;   ///< local matches waiting for loop_confirmations agreeing ones
   RobustKernel loop_kernel;
-  std::size_t loaded_nodes = 0;           ///< nodes that came from load() (working memory of earlier sessions)
+  /// Index of the current trajectory's first node: nodes before it are the working memory it must be linked
+  /// to (earlier sessions after load(), earlier trajectories after a lost event). α = n_local / n_WM uses it.
+  std::size_t trajectory_first_node = 0;
 
   std::vector<SlamNode> nodes;  ///< node id == index
   std::vector<SlamSubmap> submaps;
@@ -90,11 +92,15 @@ struct GraphSlam::Impl {
   int nodes_since_optimize = 0;
   Pose2 current_pose;
   std::optional<Pose2> initial_pose;  ///< applied at the next scan (setInitialPose)
+  std::vector<sim::LaserScan> held_scans;  ///< raw scans of LocalSlam's held-back (unmatched) results, in order
+  std::optional<Pose2> restart_anchor;  ///< after restartLost(): map pose the next scan continues from
   void applyInitialPose(const Pose2& local_pose);
 
   // pipeline (slam.cpp)
   std::optional<ScanUpdate> addScan(const sim::LaserScan& scan, const std::optional<Pose2>& odom);
   std::int64_t addNode(const LocalResult& r, const sim::LaserScan& scan);
+  /// addNode + loop search + finished submaps + optimization trigger (one inserted scan).
+  void takeNode(const LocalResult& r, const sim::LaserScan& scan, ScanUpdate& update);
   void syncSubmaps(const LocalResult& r, std::int64_t node);
   int searchLoops(std::int64_t node);
   std::vector<LoopMatch> localSearch(const LoopQuery& q, double radius, double verifier_threshold);
@@ -112,6 +118,9 @@ struct GraphSlam::Impl {
   SubmapCache& cache(int submap);
   OptimizerSummary optimize();
   void startTrajectory();
+  /// LocalSlam reported lost: a new trajectory (SLAM) or a fresh local tracker (localization) that is placed
+  /// by a global search; the pose stays continuous (restart_anchor) until a global link moves it.
+  void restartLost();
   double searchRadius() const;
 };
 

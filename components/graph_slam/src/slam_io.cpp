@@ -324,11 +324,10 @@ GraphSlam GraphSlam::load(const std::string& path, SlamOptions options) {
   s.caches.resize(s.submaps.size());
   s.stats.nodes = s.nodes.size();
   s.stats.submaps = s.submaps.size();
-  s.loaded_nodes = s.nodes.size();
   // Continue in a new trajectory (multi-session) or localize: either way the robot's place in the loaded map is
   // unknown until a global search (Stüde §3.2.1) links it.
   s.trajectory = max_trajectory + 1;
-  s.startTrajectory();
+  s.startTrajectory();  // trajectory_first_node = all loaded nodes
   s.linked = s.nodes.empty();
   return slam;
 }

@@ -60,6 +60,20 @@ std::vector<SlamParam> makeTable() {
                      [](SlamOptions& o) { return &o.local.refine.degenerate_translation_weight; }, -1, 1e9));
   t.push_back(nested("local.rotation_weight", "refiner: odometry prior weight on rotation (1/rad)",
                      [](SlamOptions& o) { return &o.local.refine.rotation_weight; }, 0, 1e9));
+  t.push_back(nested("local.recovery_score", "below this refined score, a branch-and-bound search over the recovery window (0 disables)",
+                     [](SlamOptions& o) { return &o.local.recovery_score; }, 0, 1));
+  t.push_back(nested("local.recovery_window_linear", "recovery search half window (m)",
+                     [](SlamOptions& o) { return &o.local.recovery_window.linear; }, 0, 20));
+  t.push_back(nested("local.recovery_window_angular", "recovery search half window (rad)",
+                     [](SlamOptions& o) { return &o.local.recovery_window.angular; }, 0, 3.2));
+  t.push_back(nested("local.recovery_min_gain", "a recovered pose must beat the small-window score by this much",
+                     [](SlamOptions& o) { return &o.local.recovery_min_gain; }, 0, 1));
+  t.push_back(nested("local.unmatched_score", "below this score a scan is not inserted (dead reckoning; 0 disables)",
+                     [](SlamOptions& o) { return &o.local.unmatched_score; }, 0, 1));
+  t.push_back(nested("local.lost_scans", "this many consecutive unmatched scans: lost, global search (0 disables)",
+                     [](SlamOptions& o) { return &o.local.lost_scans; }, 0, 1e6));
+  t.push_back(nested("local.judge_min_submap_scans", "scores are judged only against submaps with this many scans",
+                     [](SlamOptions& o) { return &o.local.judge_min_submap_scans; }, 0, 1e6));
   t.push_back(nested("local.hit_probability", "grid update probability of a hit", [](SlamOptions& o) { return &o.local.grid.hit_probability; }, 0.5, 1));
   t.push_back(nested("local.miss_probability", "grid update probability of a miss", [](SlamOptions& o) { return &o.local.grid.miss_probability; }, 0, 0.5));
   // graph

@@ -169,3 +169,56 @@ TEST(LocalSlam, DriftsMuchLessThanOdometryOnASimulatedRun) {
   EXPECT_LT(max_err_slam, 0.2);
   EXPECT_LT(max_err_slam, 0.25 * max_err_odom);
 }
+
+// An isolated scan that does not fit the submap is held back and goes in with the next good scan (nothing
+// is lost); lost_scans such scans in a row report lost and are discarded.
+TEST(LocalSlam, UnmatchedScansAreHeldBackThenFlushedOrReportedLost) {
+  gs::LocalSlamOptions o;
+  o.motion_min_distance = 0.0;  // every scan passes the motion filter
+  o.motion_min_angle = 0.0;
+  gs::LocalSlam slam(o);
+  const gs::Pose2 still;
+  double t = 0.0;
+  for (int i = 0; i < 15; ++i) ASSERT_TRUE(slam.addScan(t += 0.1, ring(4.0), still));
+  // A different room (a much smaller ring of another shape) at the same odometry pose.
+  gs::RangeData other;
+  for (int i = 0; i < 200; ++i) {
+    const double a = 2 * 3.14159265358979 * i / 200;
+    other.returns.emplace_back(1.2 * std::cos(a) + 0.4, 0.8 * std::sin(a) - 0.3);
+  }
+  auto odd = slam.addScan(t += 0.1, other, still);
+  ASSERT_TRUE(odd);
+  EXPECT_TRUE(odd->unmatched) << odd->match_score;
+  EXPECT_FALSE(odd->inserted);
+  EXPECT_FALSE(odd->lost);
+  const std::size_t inserted_before = slam.scansInserted();
+  auto good = slam.addScan(t += 0.1, ring(4.0), still);
+  ASSERT_TRUE(good);
+  EXPECT_FALSE(good->unmatched);
+  ASSERT_EQ(good->flushed.size(), 1u);
+  EXPECT_TRUE(good->flushed[0].inserted);
+  EXPECT_DOUBLE_EQ(good->flushed[0].stamp, odd->stamp);
+  EXPECT_EQ(slam.scansInserted(), inserted_before + 2);  // the held-back scan and this one
+  // A third place (a square room; `other` is in the submap now): held back scan after scan, then lost.
+  gs::RangeData square;
+  for (int i = 0; i < 200; ++i) {
+    const double u = -2.5 + 5.0 * (i % 50) / 50.0;
+    const int side = i / 50;
+    square.returns.emplace_back(side == 0 ? u : side == 1 ? 2.5 : side == 2 ? -u : -2.5,
+                                side == 0 ? -2.5 : side == 1 ? u : side == 2 ? 2.5 : -u);
+  }
+  for (int i = 1; i <= o.lost_scans; ++i) {
+    auto r = slam.addScan(t += 0.1, square, still);
+    ASSERT_TRUE(r);
+    EXPECT_TRUE(r->unmatched);
+    EXPECT_EQ(r->lost, i == o.lost_scans) << i;
+  }
+  EXPECT_EQ(slam.scansInserted(), inserted_before + 2);  // the lost run was never inserted
+  o.lost_scans = 0;  // disabled: unmatched scans are inserted as they come
+  gs::LocalSlam plain(o);
+  for (int i = 0; i < 15; ++i) ASSERT_TRUE(plain.addScan(i * 0.1, ring(4.0), still));
+  auto r = plain.addScan(2.0, other, still);
+  ASSERT_TRUE(r);
+  EXPECT_TRUE(r->unmatched);
+  EXPECT_TRUE(r->inserted);
+}

@@ -9,7 +9,9 @@
 //    distances of the matched points to the map's occupied cells);
 //  - loop edges carry a Huber kernel; the graph is re-optimized with the cairn optimizer (warm-started).
 // A loaded map (load()) can be extended in a new session (a new trajectory found by a global search with
-// Stüde's α_min / n_start / n_ver / r_ver verification rule) or used for localization only.
+// Stüde's α_min / n_start / n_ver / r_ver verification rule) or used for localization only. When local SLAM
+// loses track (LocalSlamOptions::lost_scans unmatched scans: kidnapped), a new trajectory starts and is
+// placed by the same global search (Stüde §3.2.1: "global search when the robot is lost").
 //
 // Not thread-safe; the component serializes calls.
 #pragma once
@@ -169,6 +171,9 @@ struct SlamStats {
   std::size_t optimizations = 0;
   double optimize_time_s = 0.0, loop_time_s = 0.0, local_time_s = 0.0;
   double last_radius = 0.0;            ///< r of eq. 3.8 at the last search
+  std::size_t local_recoveries = 0;    ///< scans the branch-and-bound recovery search re-placed
+  std::size_t scans_unmatched = 0;     ///< scans below the unmatched score (dead reckoning, not inserted)
+  std::size_t lost_events = 0;         ///< lost detections (each started a global search)
 };
 
 struct ScanUpdate {
