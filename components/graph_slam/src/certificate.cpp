@@ -414,6 +414,14 @@ CertificateResult certify(const PoseGraph& graph, const CertificateOptions& opt,
     gersh = row_abs.maxCoeff();  // |lambda(S)| <= max row sum of |S|
   }
   res.eta = opt.eta_relative * std::max(max_diag, std::numeric_limits<double>::min());
+  {
+    typename P::Vec mean = P::Vec::Zero();
+    for (const auto& t : x.t) mean += t;
+    mean /= prob.n;
+    double norm2 = static_cast<double>(D) * prob.n;  // |R_i|_F^2 = d each
+    for (const auto& t : x.t) norm2 += (t - mean).squaredNorm();
+    res.dual_bound_slack = res.eta * norm2;
+  }
   PsdTest psd(s);
   res.certified = psd.positiveDefinite(res.eta);
 

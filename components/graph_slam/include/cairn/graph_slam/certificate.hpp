@@ -63,10 +63,13 @@ struct CertificateResult {
   std::size_t edges = 0;
   double objective_input = 0.0; ///< f at the given values
   double objective = 0.0;       ///< f at the refined critical point (= f* when certified)
-  /// sum_i tr(Lambda_i) = f(Y) - tr(Y S Y^T). When S ⪰ 0, every feasible Y' has f(Y') >= this, so it is a lower
-  /// bound on f* even where the refinement stopped short of a critical point: f* lies in [dual_bound, objective]
-  /// (the bound neglects eta, i.e. holds for lambda_min >= 0; at a critical point it equals objective).
+  /// sum_i tr(Lambda_i) = f(Y) - tr(Y S Y^T). If lambda_min(S) >= 0, every feasible Y' has f(Y') >= this, so it
+  /// is a lower bound on f* even where the refinement stopped short of a critical point: f* lies in
+  /// [dual_bound, objective]. The test only shows lambda_min > -eta, which weakens the bound to
+  /// f* >= dual_bound - eta |Y*|_F^2 (Y* the optimum with centered translations); dual_bound_slack is that term
+  /// evaluated with this Y's scale (an estimate, not a bound: large maps make it non-negligible).
   double dual_bound = 0.0;
+  double dual_bound_slack = 0.0;
   int refine_iterations = 0;    ///< LM linear solves
   /// The LM stopped on its function / gradient tolerance (a critical point), not on max_iterations. The
   /// certificate's "no" means "not the global optimum" only at a critical point.
