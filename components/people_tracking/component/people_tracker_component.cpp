@@ -147,6 +147,7 @@ class PeopleTracker : public cairn::Node {
     tp.occluded_coast_time = declare_parameter<double>("tracker.occluded_coast_time", tp.occluded_coast_time, D{"s, occluded confirmed tracks are published this long", 0.0, 60.0, true});
     tp.occluded_delete_timeout = declare_parameter<double>("tracker.occluded_delete_timeout", tp.occluded_delete_timeout, D{"s without update deletes a track occluded since its last update", 0.0, 60.0, true});
     tp.free_space_delete_scans = static_cast<int>(declare_parameter<int64_t>("tracker.free_space_delete_scans", tp.free_space_delete_scans, D{"consecutive scans with beams through a track delete it", 1.0, 1000.0, true}));
+    tp.split_scans = static_cast<int>(declare_parameter<int64_t>("tracker.split_scans", tp.split_scans, D{"scans with four legs in a track's gate before it splits (0 = never)", 0.0, 1000.0, true}));
 
     // Guide (guide.hpp; Yuan §2.2.1).
     pt::GuideParams gp;

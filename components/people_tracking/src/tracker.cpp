@@ -217,6 +217,8 @@ std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<Leg
   const std::size_t nl = legs.size();
   std::vector<bool> leg_used(nl, false), gated_by_confirmed(nl, false);
   std::vector<std::vector<std::size_t>> track_legs(tracks_.size());
+  std::vector<PersonDetection> split;
+  split_births_.clear();
   const double spread2 = params_.leg_spread_sigma * params_.leg_spread_sigma;
   constexpr double kForbidden = 1e9;
   const double log_det0 = 2.0 * std::log(spread2 + pairing.sigma_pair * pairing.sigma_pair);
@@ -270,9 +272,14 @@ std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<Leg
       }
       for (std::size_t j : mine) leg_used[j] = true;
     }
+    if (confirmed_stage && params_.split_scans > 0) splitGroups(legs, pairing, cost, rows, cols, track_legs, leg_used, split);
   }
   std::vector<PersonDetection> out;
   det_track.clear();
+  for (const PersonDetection& d : split) {
+    out.push_back(d);
+    det_track.push_back(-1);
+  }
   for (std::size_t i = 0; i < tracks_.size(); ++i) {
     const auto& mine = track_legs[i];
     if (mine.empty()) continue;
@@ -288,6 +295,60 @@ std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<Leg
     det_track.push_back(-1);
   }
   return out;
+}
+
+// Group-aware split: two people entering side by side often start as one track, and the legs of the second are
+// then "gated by a confirmed track" and never start their own. A confirmed track with four or more legs in its
+// gate (two taken, two or more that nobody took) for split_scans consecutive scans is re-paired closest-first:
+// it keeps the pair nearest its prediction, the other pairs become detections that start tracks.
+void PeopleTracker::splitGroups(const std::vector<LegDetection>& legs, const DetectorParams& pairing,
+                                const Eigen::MatrixXd& cost, const std::vector<std::size_t>& rows,
+                                const std::vector<std::size_t>& cols, std::vector<std::vector<std::size_t>>& track_legs,
+                                std::vector<bool>& leg_used, std::vector<PersonDetection>& split) {
+  constexpr double kForbidden = 1e9;
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    Track& t = tracks_[rows[r]];
+    std::vector<std::size_t>& mine = track_legs[rows[r]];
+    std::vector<std::size_t> in_gate = mine;
+    for (std::size_t c = 0; c < cols.size(); ++c)
+      if (cost(static_cast<long>(2 * r), static_cast<long>(c)) < kForbidden && !leg_used[cols[c]])
+        in_gate.push_back(cols[c]);
+    t.split_evidence = (mine.size() == 2 && in_gate.size() >= 4) ? t.split_evidence + 1 : 0;
+    if (t.split_evidence < params_.split_scans) continue;
+    // Closest-first pairing of the legs in the gate (as pairLegs, but keeping the leg indices).
+    std::vector<std::tuple<double, std::size_t, std::size_t>> candidates;
+    for (std::size_t a = 0; a < in_gate.size(); ++a)
+      for (std::size_t b = a + 1; b < in_gate.size(); ++b) {
+        const double d = (legs[in_gate[a]].position - legs[in_gate[b]].position).norm();
+        if (d <= pairing.max_leg_pair_distance) candidates.emplace_back(d, in_gate[a], in_gate[b]);
+      }
+    std::sort(candidates.begin(), candidates.end());
+    std::vector<std::pair<std::size_t, std::size_t>> pairs;
+    std::vector<std::size_t> taken;
+    for (const auto& [d, a, b] : candidates) {
+      if (std::find(taken.begin(), taken.end(), a) != taken.end() || std::find(taken.begin(), taken.end(), b) != taken.end())
+        continue;
+      pairs.emplace_back(a, b);
+      taken.push_back(a);
+      taken.push_back(b);
+    }
+    if (pairs.size() < 2) continue;
+    t.split_evidence = 0;
+    // The track keeps the pair nearest its prediction; every other pair starts a track.
+    auto mid = [&](const std::pair<std::size_t, std::size_t>& q) {
+      return Eigen::Vector2d(0.5 * (legs[q.first].position + legs[q.second].position));
+    };
+    std::size_t keep = 0;
+    for (std::size_t k = 1; k < pairs.size(); ++k)
+      if ((mid(pairs[k]) - t.position()).squaredNorm() < (mid(pairs[keep]) - t.position()).squaredNorm()) keep = k;
+    for (std::size_t j : in_gate) leg_used[j] = true;  // legs left unpaired are not evidence of anyone else
+    mine = {pairs[keep].first, pairs[keep].second};
+    for (std::size_t k = 0; k < pairs.size(); ++k)
+      if (k != keep) {
+        split.push_back(personFromLegs(legs[pairs[k].first], legs[pairs[k].second], pairing));
+        split_births_.push_back(split.back().position);
+      }
+  }
 }
 
 void PeopleTracker::predict(double stamp) {
@@ -497,6 +558,7 @@ void PeopleTracker::initiate(const std::vector<PersonDetection>& dets, const std
       near |= t.confirmed && (t.position() - dets[j].position).norm() < params_.min_init_distance;
     for (const Track& t : tracks_)  // also do not start two tracks on one spot in the same scan
       near |= t.first_stamp == last_stamp_ && t.hits == 1 && (t.position() - dets[j].position).norm() < params_.min_init_distance;
+    for (const Eigen::Vector2d& b : split_births_) near &= (b - dets[j].position).squaredNorm() > 1e-12;
     if (near) continue;
     Track t;
     t.id = next_id_++;

@@ -297,3 +297,32 @@ TEST(Tracker, FreeSpaceHidesAndDeletesOccludedTracksCoast) {
     EXPECT_EQ(tracker.outputTracks()[0].id, id);
   }
 }
+
+TEST(Tracker, TrackExplainingFourLegsSplitsIntoTwoPeople) {
+  // Person A stands at (3, 0) alone until confirmed; then person B stands beside it at (3, 0.55), its legs inside
+  // A's leg gate. Without the split B's legs count as "gated by a confirmed track" and never start a track; with
+  // split_scans = 1 A keeps its own pair and B gets a track (group-aware birth). A's id never changes.
+  for (const int split : {0, 1}) {
+    TrackerParams p;
+    p.split_scans = split;
+    PeopleTracker tracker(p);
+    const DetectorParams dp;
+    auto legs = [](double y) {
+      return std::vector<LegDetection>{{{3.0, y - 0.1}, 0.9, 0.12}, {{3.0, y + 0.1}, 0.9, 0.12}};
+    };
+    for (int k = 0; k < 5; ++k) tracker.updateLegs(0.1 * k, legs(0.0), Pose2{}, dp);
+    ASSERT_EQ(tracker.confirmedTracks().size(), 1u);
+    const int a_id = tracker.confirmedTracks()[0].id;
+    for (int k = 5; k < 10; ++k) {
+      auto both = legs(0.0);
+      for (const LegDetection& l : legs(0.55)) both.push_back(l);
+      tracker.updateLegs(0.1 * k, both, Pose2{}, dp);
+    }
+    const auto tracks = tracker.confirmedTracks();
+    ASSERT_EQ(tracks.size(), split ? 2u : 1u) << "split_scans " << split;
+    for (const Track& t : tracks) {
+      EXPECT_NEAR(t.position().x(), 3.0, 0.05);
+      EXPECT_NEAR(t.position().y(), t.id == a_id ? 0.0 : 0.55, 0.05);
+    }
+  }
+}

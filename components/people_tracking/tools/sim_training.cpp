@@ -233,6 +233,10 @@ std::vector<SimLabelledCluster> simLabelledClusters(const SimTrainingParams& par
             ? 0.5
             : params.resolutions_deg[static_cast<std::size_t>(uniformInt(rng, 0, int(params.resolutions_deg.size()) - 1))];
     cfg.laser.resolution = res_deg * std::numbers::pi / 180.0;
+    // Body variety (the simulator's default walker has one leg radius and hip width): drawn per episode.
+    cfg.gait.leg_radius = rng.uniform(params.leg_radius_min, params.leg_radius_max);
+    cfg.gait.hip_half_width = rng.uniform(params.hip_half_width_min, params.hip_half_width_max);
+    cfg.gait.swing_amplitude = rng.uniform(0.2, 0.35);
     cfg.laser.noise_sigma = params.noise_sigma;
     cfg.laser.dropout_prob = params.dropout_prob;
     const sim::Twist2 cmd = rng.uniform() < 0.5 ? sim::Twist2{} : sim::Twist2{rng.uniform(0.1, 0.5), rng.uniform(-0.4, 0.4)};

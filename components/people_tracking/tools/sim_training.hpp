@@ -56,6 +56,8 @@ struct SimTrainingParams {
   int max_extra_tables = 2, max_extra_chairs = 6, max_extra_boxes = 4;  ///< random furniture added per episode
   std::vector<double> resolutions_deg{0.25, 1.0 / 3.0, 0.5};  ///< laser resolution drawn per episode (360° laser)
   double noise_sigma = 0.01, dropout_prob = 0.002;
+  double leg_radius_min = 0.04, leg_radius_max = 0.09;        ///< m, walker leg radius drawn per episode
+  double hip_half_width_min = 0.07, hip_half_width_max = 0.13;  ///< m, lateral leg offset drawn per episode
   SegmentationParams segmentation{};
   SimLabelParams label{};
 };

@@ -51,6 +51,7 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--occluded-coast") p.tracker.occluded_coast_time = number(value());
     else if (a == "--occluded-delete-timeout") p.tracker.occluded_delete_timeout = number(value());
     else if (a == "--free-space-delete") p.tracker.free_space_delete_scans = static_cast<int>(number(value()));
+    else if (a == "--split-scans") p.tracker.split_scans = static_cast<int>(number(value()));
     else if (a == "--visibility-radius") p.tracker.visibility_radius = number(value());
     else if (a == "--min-init-distance") p.tracker.min_init_distance = number(value());
     else if (a == "--pair-distance") p.detector.max_leg_pair_distance = number(value());
