@@ -63,6 +63,8 @@ void SparseCholesky::freeWork() {
 
 void SparseCholesky::setPattern(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx) {
   freeWork();
+  replay_ready_ = false;
+  replay_failed_ = false;
   if (l_ != nullptr) cholmod_free_factor(&l_, &common_);
   if (a_ != nullptr) cholmod_free_sparse(&a_, &common_);
   a_ = cholmod_allocate_sparse(n, n, row_idx.size(), /*sorted=*/1, /*packed=*/1, /*stype=*/1, CHOLMOD_REAL,
