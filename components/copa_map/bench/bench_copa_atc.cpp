@@ -1,8 +1,13 @@
 // ATC benchmark (Stüde 2024, §4.3.4): CoPA-Map vs ML, FreMEn (Fr-AAM-style) and GP-Hom on the authors' ATC
 // split (50 cm x 60 min), all trained and scored in the same run. Prints one table (NRMSE eq. 4.20, χ² eq. 4.21,
 // NLPD, 95 % coverage, train and predict time).
-//   bench_copa_atc [--data DIR] [--reduced] [--max-seconds S] [--max-iterations N] [--kmeans-inducing]
-//                  [--no-gphom] [--seed N] [--batch B] [--hyper-every K] [--gamma G] [--gphom-gamma G]
+//   bench_copa_atc [--data DIR] [--reduced] [--batches N] [--max-seconds S] [--max-iterations N]
+//                  [--kmeans-inducing] [--no-gphom] [--seed N] [--batch B] [--hyper-every K] [--gamma G]
+//                  [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z]
+// Defaults: atcTrainConfig() (copa_map.hpp). --reduced: every 4th of the authors' inducing points and exactly
+// --batches mini-batches (default 400, no time limit: reducedTrainConfig), the configuration of the CI test.
+#include <time.h>
+
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -10,6 +15,7 @@
 
 #include "cairn/copa_map/baselines.hpp"
 #include "cairn/copa_map/copa_map.hpp"
+#include "cairn/copa_map/cpu_dispatch.hpp"
 #include "cairn/copa_map/io.hpp"
 #include "cairn/copa_map/metrics.hpp"
 
@@ -17,6 +23,11 @@ using namespace cairn::copa_map;
 
 namespace {
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+double cpuNow() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
 
 void row(const char* name, const RatePrediction& p, const Eigen::VectorXd& truth, const Eigen::VectorXd* logd,
          double train_s, double pred_s) {
@@ -31,11 +42,13 @@ void row(const char* name, const RatePrediction& p, const Eigen::VectorXd& truth
 int main(int argc, char** argv) {
   std::string dir = std::string(CAIRN_SOURCE_ROOT) + "/../shared/data/people/atc_copa_map";
   bool reduced = false, kmeans_z = false, gphom = true, copa = true;
-  double max_seconds = 600;
-  int max_iter = 4000;
-  unsigned long seed = 1;
-  int batch = 1000, hyper_every = 4;
-  double gamma = 0.1, gamma_end = -1, gphom_gamma = 0.03, tolerance = 1e-3;
+  const TrainConfig def = atcTrainConfig();
+  double max_seconds = -1;
+  int max_iter = -1, batches = 400;
+  unsigned long seed = def.seed;
+  int batch = def.batch_size, hyper_every = def.hyper_every;
+  double gamma = def.natgrad_gamma_start, gamma_end = def.natgrad_gamma_end, gphom_gamma = 0.03,
+         tolerance = def.tolerance;
   bool train_z = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -46,6 +59,7 @@ int main(int argc, char** argv) {
     else if (a == "--no-copa") copa = false;
     else if (a == "--max-seconds" && i + 1 < argc) max_seconds = std::atof(argv[++i]);
     else if (a == "--max-iterations" && i + 1 < argc) max_iter = std::atoi(argv[++i]);
+    else if (a == "--batches" && i + 1 < argc) batches = std::atoi(argv[++i]);
     else if (a == "--seed" && i + 1 < argc) seed = std::strtoul(argv[++i], nullptr, 10);
     else if (a == "--batch" && i + 1 < argc) batch = std::atoi(argv[++i]);
     else if (a == "--hyper-every" && i + 1 < argc) hyper_every = std::atoi(argv[++i]);
@@ -55,7 +69,7 @@ int main(int argc, char** argv) {
     else if (a == "--tolerance" && i + 1 < argc) tolerance = std::atof(argv[++i]);
     else if (a == "--train-z") train_z = true;
     else {
-      std::fprintf(stderr, "usage: %s [--data DIR] [--reduced] [--max-seconds S] [--max-iterations N] "
+      std::fprintf(stderr, "usage: %s [--data DIR] [--reduced] [--batches N] [--max-seconds S] [--max-iterations N] "
                            "[--kmeans-inducing] [--no-gphom] [--no-copa] [--seed N] [--batch B] [--hyper-every K] [--gamma G] [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z]\n", argv[0]);
       return 2;
     }
@@ -67,27 +81,24 @@ int main(int argc, char** argv) {
     CopaMapConfig cfg;
     cfg.seed = seed;
     cfg.period_init.seed = seed;
-    TrainConfig tc;
-    tc.max_seconds = max_seconds;
-    tc.max_iterations = max_iter;
+    TrainConfig tc = reduced ? reducedTrainConfig(batches) : atcTrainConfig();
+    if (max_seconds > 0) tc.max_seconds = max_seconds;
+    if (max_iter > 0) tc.max_iterations = max_iter;
     tc.seed = seed;
     tc.batch_size = batch;
     tc.hyper_every = hyper_every;
     tc.natgrad_gamma_start = gamma;
-    tc.natgrad_gamma_end = gamma_end >= 0 ? gamma_end : gamma;
-    tc.tolerance = tolerance;
+    tc.natgrad_gamma_end = gamma_end;
+    if (!reduced) tc.tolerance = tolerance;
     tc.train_inducing = train_z;
-    if (reduced) {
-      // CI configuration: every 4th authors' inducing point.
-      Eigen::MatrixXd Zr(Z.rows() / 4, 3);
-      for (Eigen::Index i = 0; i < Zr.rows(); ++i) Zr.row(i) = Z.row(4 * i);
-      Z = Zr;
-    }
+    if (reduced) Z = everyNthRow(Z, 4);  // CI configuration: every 4th authors' inducing point
     std::printf("ATC split: %ld train, %ld test points; %ld inducing points (%s)%s\n", (long)train.X.rows(),
                 (long)test.X.rows(), kmeans_z ? (long)std::floor(cfg.alpha_ind * train.X.rows()) : (long)Z.rows(),
                 kmeans_z ? "Δ-weighted k-means" : "authors' Z", reduced ? ", reduced configuration" : "");
-    std::printf("config: batch %d, natgrad γ %.2f (GP-Hom %.2f), Adam every %d steps, time limit %.0f s per GP model, "
-                "seed %lu\n", batch, gamma, gphom_gamma, hyper_every, max_seconds, seed);
+    std::printf("config: batch %d, natgrad γ %.2f -> %.2f (GP-Hom %.2f), Adam every %d steps, at most %d batches and "
+                "%.0f s per GP model, tolerance %g, seed %lu, GEMM %s\n", batch, gamma, tc.natgrad_gamma_end,
+                gphom_gamma, hyper_every, tc.max_iterations, tc.max_seconds, tc.tolerance, seed,
+                activeGemmKernel().c_str());
     std::printf("| model      |  NRMSE  | χ² distance  |   NLPD   | cov95  | train [s] | pred [s] |\n");
     std::printf("|------------|---------|--------------|----------|--------|-----------|----------|\n");
 
@@ -117,12 +128,18 @@ int main(int argc, char** argv) {
     tc.progress = [](int it, double elbo, double s) {
       if (it % 10 == 0) std::fprintf(stderr, "  copa it %d elbo/n %.4f  %.0f s\n", it, elbo, s);
     };
+    const double c0 = cpuNow();
     const TrainReport rep = cm.train(train.X, train.y, tc);
+    const double train_cpu = cpuNow() - c0;
     t1 = now();
     const RatePrediction pcm = cm.predict(test.X);
     const Eigen::VectorXd lcm = cm.logPredictiveDensity(test.X, test.y);
     const double pt = now() - t1;
-    std::fprintf(stderr, "CoPA-Map: %d iterations, %d epochs, %s\n", rep.iterations, rep.epochs, rep.message.c_str());
+    std::fprintf(stderr, "CoPA-Map: %d iterations, %d epochs, %s; training %.1f s wall, %.1f CPU-s (%.2f CPU-s "
+                 "per batch)\n  epoch-mean ELBO/n:", rep.iterations, rep.epochs, rep.message.c_str(), rep.seconds,
+                 train_cpu, train_cpu / std::max(1, rep.iterations));
+    for (double e : rep.epoch_elbo) std::fprintf(stderr, " %.4f", e);
+    std::fprintf(stderr, "\n");
     row("CoPA-Map", pcm, test.y, &lcm, t1 - t0, pt);
     }
 

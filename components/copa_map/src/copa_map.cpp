@@ -1,9 +1,41 @@
 #include "cairn/copa_map/copa_map.hpp"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace cairn::copa_map {
+
+TrainConfig atcTrainConfig() {
+  TrainConfig tc;
+  tc.batch_size = 2000;
+  tc.natgrad_gamma_start = 0.3;
+  tc.natgrad_gamma_end = 0.1;
+  tc.adam_lr_start = 1e-2;
+  tc.adam_lr_end = 1e-3;
+  tc.decay_steps = 100;  // linear decay over the first 100 steps (§4.2.5)
+  tc.hyper_every = 5;
+  tc.tolerance = 1e-3;   // copa-map's relative ELBO change
+  tc.max_seconds = 600.0;
+  tc.max_iterations = 100000;
+  tc.seed = 1;
+  return tc;
+}
+
+Eigen::MatrixXd everyNthRow(const Eigen::MatrixXd& Z, int stride) {
+  if (stride < 1) throw std::invalid_argument("everyNthRow: stride must be >= 1");
+  Eigen::MatrixXd out((Z.rows() + stride - 1) / stride, Z.cols());
+  for (Eigen::Index i = 0; i < out.rows(); ++i) out.row(i) = Z.row(i * stride);
+  return out;
+}
+
+TrainConfig reducedTrainConfig(int batches) {
+  TrainConfig tc = atcTrainConfig();
+  tc.max_iterations = batches;
+  tc.max_seconds = std::numeric_limits<double>::infinity();
+  tc.tolerance = 0.0;
+  return tc;
+}
 
 CopaMap CopaMap::initialize(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const Eigen::VectorXd& durations,
                             const CopaMapConfig& cfg, const Eigen::MatrixXd* inducing,

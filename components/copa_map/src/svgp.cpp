@@ -283,31 +283,68 @@ namespace {
 // independent: they run on both cores (OpenMP, dynamic schedule since the blocks differ in size; Eigen's products
 // inside run single-threaded). Eigen's own triangular solves and products are single-threaded.
 constexpr Eigen::Index kColBlock = 96;
+// Below this size the blocks run on one thread: with m = 478 (the reduced ATC configuration) a natural-gradient
+// step costs 0.006 CPU-s on one thread but 0.054 CPU-s (0.24 s wall) on two of a loaded 2-core box, where every
+// join of the ~20 small parallel regions waits for a scheduler slice (bench_copa_step, docs/benchmarks.md).
+constexpr Eigen::Index kParallelBlocksMin = 6 * kColBlock;
 
 template <class F>
 void forColumnBlocks(Eigen::Index m, F&& f) {
   const Eigen::Index nb = (m + kColBlock - 1) / kColBlock;
-#pragma omp parallel for schedule(dynamic, 1) if (m > 2 * kColBlock)
+  if (m <= kParallelBlocksMin) {
+    ThreadLimit one(0.0);  // and no parallel GEMM inside the blocks either
+    for (Eigen::Index b = 0; b < nb; ++b) f(b * kColBlock, std::min(kColBlock, m - b * kColBlock));
+    return;
+  }
+#pragma omp parallel for schedule(dynamic, 1)
   for (Eigen::Index b = 0; b < nb; ++b) f(b * kColBlock, std::min(kColBlock, m - b * kColBlock));
 }
 
-// X = L⁻¹ R for lower-triangular L and R (X is lower triangular); R = I gives L⁻¹. m³/3 flops.
-Eigen::MatrixXd lowerSolveLower(const Eigen::MatrixXd& L, const Eigen::MatrixXd& R) {
+// L⁻¹ for lower-triangular L (m³/3 flops). Column block j of the inverse is found block row by block row:
+// X_jj = L_jj⁻¹, X_ij = -L_ii⁻¹ Σ_{j<=k<i} L_ik X_kj, the sum being one dispatched GEMM; column blocks are
+// independent and run on both cores.
+Eigen::MatrixXd lowerInverse(const Eigen::MatrixXd& L) {
   const Eigen::Index m = L.rows();
   Eigen::MatrixXd X = Eigen::MatrixXd::Zero(m, m);
   forColumnBlocks(m, [&](Eigen::Index j0, Eigen::Index w) {
-    const Eigen::Index h = m - j0;
-    auto blk = X.block(j0, j0, h, w);
-    blk = R.block(j0, j0, h, w);
-    blk.topRows(w).triangularView<Eigen::StrictlyUpper>().setZero();
-    L.block(j0, j0, h, h).triangularView<Eigen::Lower>().solveInPlace(blk);
+    for (Eigen::Index i0 = j0; i0 < m; i0 += kColBlock) {
+      const Eigen::Index wi = std::min(kColBlock, m - i0);
+      auto Xi = X.block(i0, j0, wi, w);
+      if (i0 == j0)
+        Xi.setIdentity();
+      else
+        gemm(Xi, L.block(i0, j0, wi, i0 - j0), false, X.block(j0, j0, i0 - j0, w), false, -1.0, 0.0);
+      L.block(i0, i0, wi, wi).triangularView<Eigen::Lower>().solveInPlace(Xi);
+    }
   });
   return X;
 }
 
-Eigen::MatrixXd lowerInverse(const Eigen::MatrixXd& L) {
-  return lowerSolveLower(L, Eigen::MatrixXd::Identity(L.rows(), L.rows()));
+// Lower Cholesky factor of a symmetric positive definite A (lower triangle read), right-looking by blocks of
+// kColBlock: the diagonal block by Eigen's LLT, the panel by a triangular solve and the trailing update
+// A22 -= L21 L21ᵀ (m³/3 of the m³/3 + O(m² nb) flops) by the dispatched GEMM, one column block of the lower
+// triangle at a time, on both cores. Returns false when A is not positive definite (like Eigen::LLT::info()).
+bool choleskyLower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
+  const Eigen::Index m = A.rows();
+  L = A;
+  for (Eigen::Index k = 0; k < m; k += kColBlock) {
+    const Eigen::Index w = std::min(kColBlock, m - k), r = m - k - w;
+    Eigen::LLT<Eigen::MatrixXd> llt(L.block(k, k, w, w));
+    if (llt.info() != Eigen::Success) return false;
+    L.block(k, k, w, w) = llt.matrixL();
+    if (r == 0) break;
+    auto panel = L.block(k + w, k, r, w);
+    llt.matrixU().solveInPlace<Eigen::OnTheRight>(panel);  // L21 = A21 L11⁻ᵀ
+    const Eigen::MatrixXd P = panel;
+    forColumnBlocks(r, [&](Eigen::Index j0, Eigen::Index wj) {
+      gemm(L.block(k + w + j0, k + w + j0, r - j0, wj), P.bottomRows(r - j0), false, P.middleRows(j0, wj), true,
+           -1.0, 1.0);
+    });
+  }
+  L.triangularView<Eigen::StrictlyUpper>().setZero();
+  return L.allFinite();
 }
+
 
 // A L for an n x m A and lower-triangular m x m L: n m² flops (m³/3 when A is lower triangular too, `a_lower`).
 Eigen::MatrixXd timesLower(const Eigen::MatrixXd& A, const Eigen::MatrixXd& L, bool a_lower = false) {
@@ -374,76 +411,142 @@ const SvgpModel::KuuCache& SvgpModel::kuu(int k) const {
   if (c.params.size() == key.size() && c.params == key && c.Kinv.rows() == lat.Z.rows() && c.Z == lat.Z) return c;
   Eigen::MatrixXd Kuu = lat.kernel->K(lat.Z, lat.Z);
   Kuu.diagonal().array() += jitter_;
-  c.llt.compute(Kuu);
-  if (c.llt.info() != Eigen::Success) throw std::runtime_error("SVGP: K_uu is not positive definite");
-  c.Linv = lowerInverse(c.llt.matrixL());
+  if (!choleskyLower(Kuu, c.Lk)) throw std::runtime_error("SVGP: K_uu is not positive definite");
+  c.Linv = lowerInverse(c.Lk);
   c.Kinv = weightedGram(c.Linv, Eigen::VectorXd::Ones(lat.Z.rows()));  // K⁻¹ = L_K⁻ᵀ L_K⁻¹
   c.params = key;
   c.Z = lat.Z;
   return c;
 }
 
+namespace {
+
+// Smallest mini-batch block per thread in evaluate().
+constexpr Eigen::Index kMinRowsPerThread = 128;
+
+// Sums over one block of mini-batch rows: everything in the ELBO and its gradients up to the sums over the batch
+// is row-local (moments, likelihood expectations, Aᵀ ∂E/∂m, Aᵀ diag(∂E/∂v) A, the K_nu and diag K_nn parts of
+// the kernel gradients).
+struct RowBlockSums {
+  double ell = 0;
+  std::vector<Eigen::VectorXd> b, hyper;
+  std::vector<Eigen::MatrixXd> Q, dnu;
+  std::string error;
+};
+
+}  // namespace
+
 ElboEvaluation SvgpModel::evaluate(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, double scale,
                                    bool hyper_grad, bool z_grad) const {
   const int nl = static_cast<int>(latents_.size());
-  std::vector<LatentCache> cache(static_cast<std::size_t>(nl));
-  std::vector<LatentMoments> q(static_cast<std::size_t>(nl));
-  for (int k = 0; k < nl; ++k) computeMoments(latents_[k], kuu(k).Kinv, X, cache[k], q[k]);
-  std::vector<LatentMoments> dq;
+  const auto unl = static_cast<std::size_t>(nl);
+  // K_uu factors first (the cache is not thread-safe) and the m x m quantities every row block needs.
+  std::vector<const KuuCache*> kc(unl);
+  std::vector<Eigen::VectorXd> beta(unl);
+  std::vector<Eigen::MatrixXd> V(unl);
+  for (std::size_t k = 0; k < unl; ++k) {
+    kc[k] = &kuu(static_cast<int>(k));
+    beta[k] = kc[k]->Kinv * latents_[k].mu;  // β = K⁻¹μ
+    // V = K⁻¹L, so that K⁻¹S = V Lᵀ and K⁻¹SK⁻¹ = V Vᵀ: 5 m³ flops instead of forming S and K⁻¹S (7 m³).
+    if (hyper_grad || z_grad) V[k] = timesLower(kc[k]->Kinv, latents_[k].L);
+  }
+
+  // The mini-batch is split into one block of rows per core: one fork/join per evaluation instead of one per
+  // matrix product, which matters on a loaded 2-core machine where every join can wait for a scheduler slice
+  // (docs/benchmarks.md, copa_map). Products inside a block run single-threaded (nested regions are inactive).
+  const Eigen::Index n = X.rows();
+  const int T = static_cast<int>(std::max<Eigen::Index>(
+      1, std::min<Eigen::Index>(omp_get_max_threads(), n / kMinRowsPerThread)));
+  std::vector<RowBlockSums> parts(static_cast<std::size_t>(T));
+#pragma omp parallel num_threads(T) if (T > 1)
+  {
+    const int t = omp_get_thread_num();
+    RowBlockSums& P = parts[static_cast<std::size_t>(t)];
+    // No nested teams: Eigen's GEMM decides on threads by omp_get_num_threads(), which is 1 again inside an
+    // inactive nested region, and would then start its own parallel product within this block.
+    omp_set_num_threads(1);
+    try {
+      const Eigen::Index r0 = n * t / T, len = n * (t + 1) / T - r0;
+      const Eigen::MatrixXd Xt = X.middleRows(r0, len);
+      const Eigen::VectorXd yt = y.segment(r0, len);
+      std::vector<LatentCache> cache(unl);
+      std::vector<LatentMoments> q(unl), dq;
+      for (std::size_t k = 0; k < unl; ++k) computeMoments(latents_[k], kc[k]->Kinv, Xt, cache[k], q[k]);
+      P.ell = lik_->variationalExpectations(yt, q, &dq);
+      P.b.resize(unl);
+      P.Q.resize(unl);
+      P.hyper.resize(unl);
+      P.dnu.resize(unl);
+      for (std::size_t k = 0; k < unl; ++k) {
+        const LatentGp& lat = latents_[k];
+        const LatentCache& c = cache[k];
+        P.b[k].noalias() = c.A.transpose() * dq[k].m;
+        P.Q[k] = weightedGram(c.A, dq[k].v);
+        if (!hyper_grad && !z_grad) continue;
+        // ∂(scale E - KL)/∂K_nu = scale [∂E/∂m βᵀ + 2 diag(∂E/∂v)(A S K⁻¹ - A)], chained into the kernel.
+        Eigen::MatrixXd ASK = c.A;
+        gemm(ASK, c.AL, false, V[k], true, 1.0, -1.0);  // A S K⁻¹ - A
+        Eigen::MatrixXd Gnu = dq[k].m * beta[k].transpose();
+        Gnu.noalias() += 2.0 * (dq[k].v.asDiagonal() * ASK);
+        Gnu *= scale;
+        if (hyper_grad) P.hyper[k] = lat.kernel->gradK(Xt, lat.Z, Gnu) + lat.kernel->gradKdiag(Xt, scale * dq[k].v);
+        if (z_grad) lat.kernel->gradInputs(Xt, lat.Z, Gnu, nullptr, &P.dnu[k]);
+      }
+    } catch (const std::exception& e) {
+      P.error = e.what();
+    }
+  }
+  for (const auto& P : parts)
+    if (!P.error.empty()) throw std::runtime_error(P.error);
+
   ElboEvaluation ev;
-  ev.ell = lik_->variationalExpectations(y, q, &dq);
-  ev.latent.resize(static_cast<std::size_t>(nl));
+  ev.latent.resize(unl);
   if (hyper_grad) ev.hyper_grad = Eigen::VectorXd::Zero(numHyperParams());
-  if (z_grad) ev.z_grad.resize(static_cast<std::size_t>(nl));
+  if (z_grad) ev.z_grad.resize(unl);
+  for (const auto& P : parts) ev.ell += P.ell;
   int offset = 0;
-  for (int k = 0; k < nl; ++k) {
+  for (std::size_t k = 0; k < unl; ++k) {
     const LatentGp& lat = latents_[k];
-    LatentCache& c = cache[k];
     auto& pl = ev.latent[k];
     const Eigen::Index m = lat.Z.rows();
-    pl.b.noalias() = c.A.transpose() * dq[k].m;
-    pl.Q = weightedGram(c.A, dq[k].v);
-    const KuuCache& kc = kuu(k);
-    const Eigen::MatrixXd& Kinv = kc.Kinv;
-    const Eigen::VectorXd beta = Kinv * lat.mu;
+    pl.b = parts[0].b[k];
+    pl.Q = std::move(parts[0].Q[k]);
+    for (std::size_t t = 1; t < parts.size(); ++t) {
+      pl.b += parts[t].b[k];
+      pl.Q += parts[t].Q[k];
+    }
+    const Eigen::MatrixXd& Kinv = kc[k]->Kinv;
     // KL(q(u) || p(u)) = ½[tr(K⁻¹S) + μᵀK⁻¹μ - m + log|K| - log|S|] (eq. 4.12); tr(K⁻¹S) = ‖L_K⁻¹ L‖²_F.
-    const Eigen::MatrixXd LKL = timesLower(kc.Linv, lat.L, true);  // L_K⁻¹ L (both lower triangular)
-    const double logdetK = 2.0 * kc.llt.matrixLLT().diagonal().array().log().sum();
+    const Eigen::MatrixXd LKL = timesLower(kc[k]->Linv, lat.L, true);  // L_K⁻¹ L (both lower triangular)
+    const double logdetK = 2.0 * kc[k]->Lk.diagonal().array().log().sum();
     const double logdetS = 2.0 * lat.L.diagonal().array().abs().log().sum();
-    ev.kl += 0.5 * (LKL.squaredNorm() + lat.mu.dot(beta) - static_cast<double>(m) + logdetK - logdetS);
-    pl.grad_mu = scale * pl.b - beta;
+    ev.kl += 0.5 * (LKL.squaredNorm() + lat.mu.dot(beta[k]) - static_cast<double>(m) + logdetK - logdetS);
+    pl.grad_mu = scale * pl.b - beta[k];
     pl.Kinv = Kinv;
-    if (hyper_grad || z_grad) {
-      // ∂/∂K_nu, ∂/∂diag K_nn, ∂/∂K_uu of scale * E - KL, chained into the kernel parameters. With V = K⁻¹L
-      // (so K⁻¹S = V Lᵀ and K⁻¹SK⁻¹ = V Vᵀ): 5 m³ flops instead of forming S and K⁻¹S (7 m³).
-      const Eigen::MatrixXd V = timesLower(Kinv, lat.L);
-      Eigen::MatrixXd Gnu = dq[k].m * beta.transpose();
-      Eigen::MatrixXd ASK = c.A;
-      gemm(ASK, c.AL, false, V, true, 1.0, -1.0);  // A S K⁻¹ - A
-      Gnu.noalias() += 2.0 * (dq[k].v.asDiagonal() * ASK);
-      Gnu *= scale;
-      // Only the symmetric part of G_uu matters (K_uu is symmetric), so K⁻¹SQ + QSK⁻¹ enters as 2 K⁻¹SQ.
-      Eigen::MatrixXd Guu = product(V, false, timesLower(pl.Q, lat.L), true);  // K⁻¹ S Q
-      Guu = scale * (pl.Q - 2.0 * Guu - pl.b * beta.transpose());
-      Guu -= 0.5 * (Kinv - weightedGram(V.transpose(), Eigen::VectorXd::Ones(m)) - beta * beta.transpose());
-      // Symmetrize and fold onto the lower triangle: the kernel gradient skips the zero upper half.
-      Eigen::MatrixXd Gs = Eigen::MatrixXd::Zero(m, m);
-      Gs.triangularView<Eigen::StrictlyLower>() = Guu + Guu.transpose();
-      Gs.diagonal() = Guu.diagonal();
-      Guu = std::move(Gs);
-      const int np = lat.kernel->numParams();
-      if (hyper_grad)
-        ev.hyper_grad.segment(offset, np) = lat.kernel->gradK(X, lat.Z, Gnu) +
-                                            lat.kernel->gradKdiag(X, scale * dq[k].v) +
-                                            lat.kernel->gradK(lat.Z, lat.Z, Guu);
-      offset += np;
-      if (z_grad) {
-        // Z enters K_nu (second argument) and both arguments of K_uu; k(x, x) does not depend on x.
-        Eigen::MatrixXd dnu, duu1, duu2;
-        lat.kernel->gradInputs(X, lat.Z, Gnu, nullptr, &dnu);
-        lat.kernel->gradInputs(lat.Z, lat.Z, Guu, &duu1, &duu2);
-        ev.z_grad[static_cast<std::size_t>(k)] = dnu + duu1 + duu2;
-      }
+    if (!hyper_grad && !z_grad) continue;
+    // ∂/∂K_uu of scale E - KL. Only the symmetric part matters (K_uu is symmetric), so K⁻¹SQ + QSK⁻¹ enters as
+    // 2 K⁻¹SQ.
+    Eigen::MatrixXd Guu = product(V[k], false, timesLower(pl.Q, lat.L), true);  // K⁻¹ S Q
+    Guu = scale * (pl.Q - 2.0 * Guu - pl.b * beta[k].transpose());
+    Guu -= 0.5 * (Kinv - weightedGram(V[k].transpose(), Eigen::VectorXd::Ones(m)) - beta[k] * beta[k].transpose());
+    // Symmetrize and fold onto the lower triangle: the kernel gradient skips the zero upper half.
+    Eigen::MatrixXd Gs = Eigen::MatrixXd::Zero(m, m);
+    Gs.triangularView<Eigen::StrictlyLower>() = Guu + Guu.transpose();
+    Gs.diagonal() = Guu.diagonal();
+    Guu = std::move(Gs);
+    const int np = lat.kernel->numParams();
+    if (hyper_grad) {
+      auto seg = ev.hyper_grad.segment(offset, np);
+      seg = lat.kernel->gradK(lat.Z, lat.Z, Guu);
+      for (const auto& P : parts) seg += P.hyper[k];
+    }
+    offset += np;
+    if (z_grad) {
+      // Z enters K_nu (second argument) and both arguments of K_uu; k(x, x) does not depend on x.
+      Eigen::MatrixXd duu1, duu2;
+      lat.kernel->gradInputs(lat.Z, lat.Z, Guu, &duu1, &duu2);
+      ev.z_grad[k] = duu1 + duu2;
+      for (const auto& P : parts) ev.z_grad[k] += P.dnu[k];
     }
   }
   ev.elbo = scale * ev.ell - ev.kl;
@@ -464,9 +567,9 @@ double SvgpModel::naturalGradientStep(int k, const ElboEvaluation& ev, double sc
     Ln = 0.5 * (Ln + Ln.transpose()).eval();
     const Eigen::VectorXd t1 = (1.0 - gamma) * theta1 + gamma * target1;
     // Lower-triangular root of S' = Λ'⁻¹ from the Cholesky factor of the reversed precision.
-    Eigen::LLT<Eigen::MatrixXd> llt(Ln.reverse());
-    if (llt.info() != Eigen::Success) continue;
-    const Eigen::MatrixXd Minv = lowerInverse(llt.matrixL());
+    Eigen::MatrixXd M;
+    if (!choleskyLower(Ln.reverse(), M)) continue;
+    const Eigen::MatrixXd Minv = lowerInverse(M);
     Eigen::MatrixXd Lnew = Minv.transpose().reverse();
     Lnew.triangularView<Eigen::StrictlyUpper>().setZero();
     const Eigen::VectorXd mu_new = Lnew * (Lnew.transpose() * t1);

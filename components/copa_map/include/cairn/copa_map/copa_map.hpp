@@ -33,6 +33,17 @@ struct CopaMapConfig {
   std::uint64_t seed = 1;
 };
 
+// Training schedule of the ATC benchmark (docs/benchmarks.md, copa_map): mini-batch 2000, natural-gradient γ
+// 0.3 -> 0.1 over the first 100 steps, Adam (1e-2 -> 1e-3) on every 5th batch, seed 1; stops when the epoch-mean
+// ELBO changes relatively less than 1e-3 (TrainConfig::tolerance) or at 600 s.
+TrainConfig atcTrainConfig();
+
+// The reduced configuration used by CI (issue 7): every `stride`-th row of the inducing inputs and exactly
+// `batches` mini-batches of atcTrainConfig() (no time limit, no early stop), so that the result depends only on
+// the data and the seed, not on the machine's load.
+Eigen::MatrixXd everyNthRow(const Eigen::MatrixXd& Z, int stride);
+TrainConfig reducedTrainConfig(int batches);
+
 class CopaMap {
  public:
   CopaMap() = default;

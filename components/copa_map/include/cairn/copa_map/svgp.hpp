@@ -164,7 +164,7 @@ class SvgpModel {
   struct KuuCache {
     Eigen::VectorXd params;
     Eigen::MatrixXd Z;
-    Eigen::LLT<Eigen::MatrixXd> llt;
+    Eigen::MatrixXd Lk;    // Cholesky factor L_K of K_uu + jitter I
     Eigen::MatrixXd Linv;  // L_K⁻¹
     Eigen::MatrixXd Kinv;
   };
