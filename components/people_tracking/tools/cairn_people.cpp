@@ -84,7 +84,7 @@ void usage() {
       "usage: cairn people <verb> [options]\n"
       "  train --kind adaboost|svm [--features arras14@1|stuede5@1] [--scenes 1500] [--seed 1] [--data CSV[,CSV]] --out FILE\n"
       "  eval  --model FILE [--scenes 500] [--seed 1000003] [--data CSV] [--json]\n"
-      "  gen-train [--worlds apartment,office,warehouse] [--episodes 200] [--seed 1] [--scans-per-episode 6] -o FILE\n"
+      "  gen-train [--worlds apartment,office,warehouse,open] [--episodes 200] [--seed 1] [--scans-per-episode 6] -o FILE\n"
       "  bench --world auto --trajectories FILE [--robot-path FILE] [--seed N] [--duration S] [--max-people N]\n"
       "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S] [--dump DIR] [--json]\n"
       "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--json]");

@@ -157,6 +157,18 @@ sim::Region worldRegion(const sim::World& w, sim::Rng& rng) {
   return r;
 }
 
+// "open": a walled empty hall (side x side m), like the open areas of pedestrian data sets (no furniture of its
+// own; the episode adds some).
+sim::World openHall(double side) {
+  sim::World w;
+  w.name = "open";
+  const sim::Vec2 c[4] = {{0, 0}, {side, 0}, {side, side}, {0, side}};
+  for (int i = 0; i < 4; ++i) w.walls.push_back({c[i], c[(i + 1) % 4]});
+  w.regions.push_back({"hall", {{2, 2}, {side - 2, 2}, {side - 2, side - 2}, {2, side - 2}}});
+  w.computeBounds();
+  return w;
+}
+
 int uniformInt(sim::Rng& rng, int lo, int hi) {
   return lo + std::min(hi - lo, int(rng.uniform() * double(hi - lo + 1)));
 }
@@ -166,7 +178,7 @@ int uniformInt(sim::Rng& rng, int lo, int hi) {
 std::vector<SimLabelledCluster> simLabelledClusters(const SimTrainingParams& params, SimLabelStats* stats) {
   if (params.worlds.empty()) throw InputError("gen-train: no worlds given");
   std::vector<sim::World> worlds;
-  for (const std::string& w : params.worlds) worlds.push_back(sim::loadWorld(sim::resolveWorldPath(w)));
+  for (const std::string& w : params.worlds) worlds.push_back(w == "open" ? openHall(30.0) : sim::loadWorld(sim::resolveWorldPath(w)));
   std::vector<SimLabelledCluster> out;
   const sim::Rng root(params.seed);
   for (int k = 0; k < params.episodes; ++k) {

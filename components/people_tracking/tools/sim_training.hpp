@@ -45,7 +45,8 @@ std::vector<SimLabelledCluster> labelSimScan(const sim::LaserScan& scan, const s
                                              const SimLabelParams& params, SimLabelStats* stats = nullptr);
 
 struct SimTrainingParams {
-  std::vector<std::string> worlds{"apartment", "office", "warehouse"};  ///< names or YAML paths, chosen per episode
+  /// World names or YAML paths, one drawn per episode; "open" is a built-in empty 30 m walled hall.
+  std::vector<std::string> worlds{"apartment", "office", "warehouse"};
   int episodes = 200;
   std::uint64_t seed = 1;  ///< episode k uses the stream (seed, k): disjoint seeds give disjoint data
   int scans_per_episode = 6;
