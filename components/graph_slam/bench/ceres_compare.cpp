@@ -7,7 +7,7 @@
 //   cairn-slam-bench [--data DIR] [--runs N] [--threads T] [--max-iters N] [--only NAME] [--outliers N]
 //                    [--solver lm|gn|dogleg] [--ceres-solver lm|dogleg] [--ordering auto|amd|nd]
 //                    [--factorization auto|simplicial|supernodal] [--no-chordal]
-//                    [--profile] [--trace] [--incremental] [--reuse-min-gain G]
+//                    [--profile] [--trace] [--incremental] [--reuse-min-gain G] [--certify-iters N]
 //
 // --incremental replays M3500 (or --only intel / city) as a SLAM front end would (see incrementalExperiment).
 // Per dataset the SE-Sync objective at cairn's solutions and SE-Sync's verification certificate of them
@@ -226,19 +226,19 @@ CeresRun solveWithCeres(gs::PoseGraph graph, const gs::OptimizerOptions& opt, bo
 
 // SE-Sync's verification certificate (core: certificate.hpp) at cairn's solution: refine to a critical point of
 // SE-Sync's objective f, then decide S = M - Lambda(Y) >= 0. One line fragment "yes/no (lambda_min ...)".
-// The refinement is capped at 150 LM solves here (sphere_bignoise converges only linearly: 1000 solves took
-// 400 s); where it stops short, "yes" still bounds f* from below by the dual bound less its tolerance slack
-// (certificate.hpp).
-std::string certificateText(const gs::PoseGraph& g) {
+// The refinement is capped at --certify-iters (150) LM solves here (sphere_bignoise converges only linearly: 1000
+// solves took 400 s); where it stops short, "yes" still bounds f* from below by the dual bound less its tolerance
+// slack (certificate.hpp), while "no" is inconclusive (not a critical point).
+std::string certificateText(const gs::PoseGraph& g, int max_iterations) {
   gs::CertificateOptions co;
-  co.max_iterations = 150;
+  co.max_iterations = max_iterations;
   const gs::CertificateResult c = gs::certifyGlobalOptimum(g, co);
   char buf[400];
   if (c.certified) {
     std::snprintf(buf, sizeof(buf),
-                  "yes (lambda_min in [-%.2g, %.2g], next %.3g; f %.10g -> %.10g >= f* >= %.10g - %.2g, %d LM "
-                  "solves%s, %.2f s)",
-                  c.eta, c.lambda_min_upper, c.lambda_deflated, c.objective_input, c.objective, c.dual_bound,
+                  "yes (lambda_min in [%.2g, %.2g], eta %.2g, next %.3g; f %.10g -> %.10g >= f* >= %.10g - %.2g, "
+                  "%d LM solves%s, %.2f s)",
+                  c.lambda_min_lower, c.lambda_min_upper, c.eta, c.lambda_deflated, c.objective_input, c.objective, c.dual_bound,
                   c.dual_bound_slack, c.refine_iterations, c.refine_converged ? "" : " (not converged)", c.time_s);
   } else {
     std::snprintf(buf, sizeof(buf), "no (lambda_min %.4g, eta %.2g; f %.10g -> %.10g, %d LM solves%s, %.2f s)",
@@ -457,6 +457,7 @@ int main(int argc, char** argv) {
   bool chordal = true;
   bool profile = false;
   bool incremental = false;
+  int certify_iters = 150;
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
     auto next = [&]() -> std::string {
@@ -486,6 +487,8 @@ int main(int argc, char** argv) {
       opt.trace = true;
     } else if (a == "--reuse-min-gain") {
       opt.factor_reuse_min_gain = std::atof(next().c_str());
+    } else if (a == "--certify-iters") {
+      certify_iters = std::max(0, std::atoi(next().c_str()));
     } else if (a == "--incremental") {
       incremental = true;
     } else if (a == "--profile") {
@@ -505,7 +508,7 @@ int main(int argc, char** argv) {
                    "usage: cairn-slam-bench [--data DIR] [--runs N] [--threads T] [--max-iters N] [--only NAME]\n"
                    "         [--outliers N] [--solver lm|gn|dogleg] [--ceres-solver lm|dogleg]\n"
                    "         [--ordering auto|amd|nd] [--factorization auto|simplicial|supernodal] [--no-chordal]\n"
-                   "         [--profile] [--trace] [--incremental] [--reuse-min-gain G]\n");
+                   "         [--profile] [--trace] [--incremental] [--reuse-min-gain G] [--certify-iters N]\n");
       return 2;
     }
   }
@@ -560,7 +563,7 @@ int main(int argc, char** argv) {
       cs = optimizer.optimize(g);
       cc.push_back(cpuSeconds() - c0);
       sesync_guess = gs::seSyncObjective(g);
-      if (r == 0) cert_guess = certificateText(g);
+      if (r == 0) cert_guess = certificateText(g, certify_iters);
       tc.push_back(cs.time_s);
       c0 = cpuSeconds();
       cr = solveWithCeres(graph, opt, ceres_dogleg);
@@ -573,7 +576,7 @@ int main(int argc, char** argv) {
         chs = gs::Optimizer(opt).optimize(h);
         tch.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         sesync_chordal = gs::seSyncObjective(h);
-        if (r == 0) cert_chordal = certificateText(h);
+        if (r == 0) cert_chordal = certificateText(h, certify_iters);
       }
     }
     const double mc = median(tc), mr = median(tr);

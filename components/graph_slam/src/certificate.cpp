@@ -414,14 +414,14 @@ CertificateResult certify(const PoseGraph& graph, const CertificateOptions& opt,
     gersh = row_abs.maxCoeff();  // |lambda(S)| <= max row sum of |S|
   }
   res.eta = opt.eta_relative * std::max(max_diag, std::numeric_limits<double>::min());
+  double y_norm2 = static_cast<double>(D) * prob.n;  // |Y|_F^2 with centered translations (|R_i|_F^2 = d)
   {
     typename P::Vec mean = P::Vec::Zero();
     for (const auto& t : x.t) mean += t;
     mean /= prob.n;
-    double norm2 = static_cast<double>(D) * prob.n;  // |R_i|_F^2 = d each
-    for (const auto& t : x.t) norm2 += (t - mean).squaredNorm();
-    res.dual_bound_slack = res.eta * norm2;
+    for (const auto& t : x.t) y_norm2 += (t - mean).squaredNorm();
   }
+  res.dual_bound_slack = res.eta * y_norm2;
   PsdTest psd(s);
   res.certified = psd.positiveDefinite(res.eta);
 
@@ -456,6 +456,14 @@ CertificateResult certify(const PoseGraph& graph, const CertificateOptions& opt,
       psd.solve(v, w);
       v = w;
     }
+    // Tighten the lower end: the smallest shift eta / 10^k that still factorizes bounds lambda_min from below
+    // (and with it the tolerance's slack in the dual bound). Not below 1e-14 max S_ii: smaller shifts are
+    // within the rounding of the factorization (a factorization then "succeeds" below the Rayleigh quotient).
+    double sigma = res.eta;
+    const double floor_shift = 1e-14 * max_diag;
+    while (0.1 * sigma >= floor_shift && psd.positiveDefinite(0.1 * sigma)) sigma *= 0.1;
+    res.lambda_min_lower = -sigma;
+    res.dual_bound_slack = sigma * y_norm2;
   } else {
     // Bisection on the shift: positive definite at hi, not at lo.
     double lo = res.eta, hi = std::max(gersh * (1.0 + 1e-9) + res.eta, 2.0 * res.eta);

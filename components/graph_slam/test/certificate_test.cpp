@@ -147,6 +147,9 @@ TEST(Certificate, NoiseFree2dIsCertified) {
   EXPECT_TRUE(r.refine_converged);
   EXPECT_TRUE(r.certified);
   EXPECT_GE(r.lambda_min, -r.eta);
+  EXPECT_GE(r.lambda_min_lower, -r.eta);
+  EXPECT_LE(r.lambda_min_lower, r.lambda_min_upper);
+  EXPECT_LE(r.dual_bound_slack, r.eta * 1e6);
   EXPECT_GT(r.lambda_deflated, 0.0);  // strict: only the known null space at zero
   EXPECT_NEAR(gs::seSyncObjective(refined), r.objective, 1e-12);
 }

@@ -65,9 +65,9 @@ struct CertificateResult {
   double objective = 0.0;       ///< f at the refined critical point (= f* when certified)
   /// sum_i tr(Lambda_i) = f(Y) - tr(Y S Y^T). If lambda_min(S) >= 0, every feasible Y' has f(Y') >= this, so it
   /// is a lower bound on f* even where the refinement stopped short of a critical point: f* lies in
-  /// [dual_bound, objective]. The test only shows lambda_min > -eta, which weakens the bound to
-  /// f* >= dual_bound - eta |Y*|_F^2 (Y* the optimum with centered translations); dual_bound_slack is that term
-  /// evaluated with this Y's scale (an estimate, not a bound: large maps make it non-negligible).
+  /// [dual_bound, objective]. The Cholesky tests only show lambda_min >= lambda_min_lower, which weakens it to
+  /// f* >= dual_bound - |lambda_min_lower| |Y*|_F^2 (Y* the optimum with centered translations);
+  /// dual_bound_slack is that term evaluated with this Y's scale (an estimate, not a bound).
   double dual_bound = 0.0;
   double dual_bound_slack = 0.0;
   int refine_iterations = 0;    ///< LM linear solves
@@ -78,7 +78,9 @@ struct CertificateResult {
   /// |Y S|_F / |Y M|_F at the refined point: how exactly the multipliers satisfy stationarity.
   double stationarity = 0.0;
   double eta = 0.0;             ///< absolute tolerance used
-  /// Certified: lambda_min(S) lies in (-eta, lambda_min_upper]; not certified: lambda_min(S) lies in
+  /// Certified: lambda_min(S) lies in [lambda_min_lower, lambda_min_upper], lower = -(smallest shift eta / 10^k
+  /// >= 1e-14 max S_ii for which S + shift I still factorizes), upper = Rayleigh quotient on the known null space;
+  /// not certified: lambda_min(S) lies in
   /// [lambda_min_lower, lambda_min_upper] (bisection bracket, both negative) and lambda_min = their midpoint.
   double lambda_min = 0.0;
   double lambda_min_lower = 0.0;
