@@ -84,7 +84,8 @@ void usage() {
       "usage: cairn people <verb> [options]\n"
       "  train --kind adaboost|svm [--features arras14@1|stuede5@1] [--scenes 1500] [--seed 1] [--data CSV[,CSV]] --out FILE\n"
       "  eval  --model FILE [--scenes 500] [--seed 1000003] [--data CSV] [--json]\n"
-      "  gen-train [--worlds apartment,office,warehouse,open] [--episodes 200] [--seed 1] [--scans-per-episode 6] -o FILE\n"
+      "  gen-train [--worlds apartment,office,warehouse,open] [--episodes 200] [--seed 1] [--scans-per-episode 6] [--walker-area 5]\n"
+      "            [--scene-generator N] -o FILE\n"
       "  bench --world auto --trajectories FILE [--robot-path FILE] [--seed N] [--duration S] [--max-people N]\n"
       "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S] [--dump DIR] [--json]\n"
       "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--json]");
@@ -120,10 +121,22 @@ int genTrain(const Args& a) {
   p.seed = static_cast<std::uint64_t>(toLong(a, "seed", 1));
   p.scans_per_episode = static_cast<int>(toLong(a, "scans-per-episode", p.scans_per_episode));
   p.max_walkers = static_cast<int>(toLong(a, "max-walkers", p.max_walkers));
+  p.walker_area = toDouble(a, "walker-area", p.walker_area);
+  if (!(p.walker_area >= 1.0 && p.walker_area <= 50.0)) fail("gen-train: --walker-area must be in [1, 50] m");
   if (p.episodes < 1 || p.scans_per_episode < 1) fail("gen-train: --episodes and --scans-per-episode must be >= 1");
   if (p.max_walkers < p.min_walkers) fail("gen-train: --max-walkers must be >= 1");
   const std::string out = a.get("o", a.get("out", ""));
   if (out.empty()) fail("gen-train needs -o FILE");
+  if (a.has("scene-generator")) {  // the package's own scene generator instead of the simulator (for comparisons)
+    TrainingDataParams d;
+    d.scenes = static_cast<int>(toLong(a, "scene-generator", 500));
+    d.seed = p.seed;
+    const auto samples = generateLabelledClusters(d);
+    saveLabelledClusters(out, samples);
+    std::printf("gen-train: %zu clusters from %d generated scenes (seed %llu) -> %s\n", samples.size(), d.scenes,
+                static_cast<unsigned long long>(d.seed), out.c_str());
+    return 0;
+  }
   SimLabelStats st;
   const std::vector<SimLabelledCluster> clusters = simLabelledClusters(p, &st);
   std::vector<LabelledCluster> samples;

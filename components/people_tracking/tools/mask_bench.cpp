@@ -48,6 +48,7 @@ struct MaskBenchParams {
   double follow_distance = 1.2; // m, the robot stops closer than this to the guide (choice; Yuan gives no value)
   double max_v = 0.7;           // m/s, following speed limit
   double max_w = 1.0;           // rad/s
+  std::string model;            // leg classifier ("" = the shipped default AdaBoost model)
   double fov_deg = 360.0;       // laser field of view (Yuan's robot: a front laser; 180 deg is the closer setting)
   bool json = false;
 };
@@ -162,7 +163,7 @@ int run(const MaskBenchParams& p) {
   const sim::Pose2 mount = cfg.laser.mount;
   gs::GraphSlam raw(slamOptions(mount)), masked(slamOptions(mount));
   auto classifier = std::make_shared<const LegClassifier>(
-      LegClassifier::load(defaultModelPath(ClassifierKind::kAdaBoost, "arras14")));
+      LegClassifier::load(p.model.empty() ? defaultModelPath(ClassifierKind::kAdaBoost, "arras14") : p.model));
   const PersonDetector detector(classifier);
   PeopleTracker tracker;
   GuideTracker guider;
@@ -326,6 +327,7 @@ int runMaskBenchVerb(int argc, char** argv) {
     } else if (a == "--keep-spurs") p.keep_spurs = true;
     else if (a == "--follow-distance") p.follow_distance = number(value());
     else if (a == "--fov-deg") p.fov_deg = number(value());
+    else if (a == "--model") p.model = value();
     else throw InputError("unknown mask-bench option '" + a + "'");
   }
   if (!(p.speed > 0.05 && p.speed < 3.0)) throw InputError("--speed must be in (0.05, 3) m/s");
