@@ -49,24 +49,32 @@ struct SimRun {
   std::vector<cairn::sim::Odometry> odom, truth;
 };
 
-// Out along the office's main corridor and back (a loop in time: the return trip revisits every place), with
-// odometry that drifts in heading, so local SLAM alone ends metres off. Deterministic (seeded).
-SimRun simulateOutAndBack() {
+// The office world without people, a 360-beam laser, the given odometry noise and route. Deterministic (seeded).
+SimRun simulateOffice(std::uint64_t seed, const cairn::sim::OdometryNoiseConfig& odometry,
+                      std::vector<cairn::sim::Vec2> route, double seconds) {
   namespace sim = cairn::sim;
   const sim::World office = sim::loadWorld(sim::resolveWorldPath("office"));
   sim::SimConfig cfg;
-  cfg.seed = 11;
+  cfg.seed = seed;
   cfg.people = false;
   cfg.crowd = false;
-  cfg.odometry.scale_error = 0.03;
-  cfg.odometry.heading_drift = 0.03;  // rad/m
-  cfg.odometry.sigma_rot = 0.02;
+  cfg.odometry = odometry;
   cfg.laser.resolution = 1.0 * M_PI / 180.0;
   sim::Simulator s(office, cfg);
-  s.followRoute({{2, 12.55}, {24, 12.55}, {2, 12.55}});
+  s.followRoute(std::move(route));
   sim::SimOutput out;
-  s.advance(120.0, out);
+  s.advance(seconds, out);
   return {out.scans, out.odometry, out.ground_truth};
+}
+
+// Out along the office's main corridor and back (a loop in time: the return trip revisits every place), with
+// odometry that drifts in heading, so local SLAM alone ends metres off.
+SimRun simulateOutAndBack() {
+  cairn::sim::OdometryNoiseConfig odo;
+  odo.scale_error = 0.03;
+  odo.heading_drift = 0.03;  // rad/m
+  odo.sigma_rot = 0.02;
+  return simulateOffice(11, odo, {{2, 12.55}, {24, 12.55}, {2, 12.55}}, 120.0);
 }
 
 const cairn::sim::Odometry& nearest(const std::vector<cairn::sim::Odometry>& v, double t) {
@@ -132,20 +140,10 @@ double errorInMapFrame(const gs::GraphSlam& reference, const SimRun& run, const 
 // Along the corridor, into office_s2 and out again, on to the junction and back: the office is mapped early,
 // so a robot carried from the corridor into it can be placed by a global search.
 SimRun simulateOfficeDetour() {
-  namespace sim = cairn::sim;
-  const sim::World office = sim::loadWorld(sim::resolveWorldPath("office"));
-  sim::SimConfig cfg;
-  cfg.seed = 12;
-  cfg.people = false;
-  cfg.crowd = false;
-  cfg.odometry.scale_error = 0.02;
-  cfg.odometry.heading_drift = 0.01;  // rad/m
-  cfg.laser.resolution = 1.0 * M_PI / 180.0;
-  sim::Simulator s(office, cfg);
-  s.followRoute({{2, 12.55}, {8.2, 12.55}, {8.2, 5.0}, {8.2, 12.55}, {24, 12.55}, {2, 12.55}});
-  sim::SimOutput out;
-  s.advance(140.0, out);
-  return {out.scans, out.odometry, out.ground_truth};
+  cairn::sim::OdometryNoiseConfig odo;
+  odo.scale_error = 0.02;
+  odo.heading_drift = 0.01;  // rad/m
+  return simulateOffice(12, odo, {{2, 12.55}, {8.2, 12.55}, {8.2, 5.0}, {8.2, 12.55}, {24, 12.55}, {2, 12.55}}, 140.0);
 }
 
 // Index of the first scan from `from` on whose true position satisfies `pred`.
