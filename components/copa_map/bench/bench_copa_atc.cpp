@@ -5,7 +5,7 @@
 //                  [--kmeans-inducing] [--no-gphom] [--seed N] [--batch B] [--hyper-every K] [--gamma G]
 //                  [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z]
 // Defaults: atcTrainConfig() (copa_map.hpp). --reduced: every 4th of the authors' inducing points and exactly
-// --batches mini-batches (default 400, no time limit: reducedTrainConfig), the configuration of the CI test.
+// --batches mini-batches (default 1000, no time limit: reducedTrainConfig), the configuration of the CI test.
 #include <time.h>
 
 #include <chrono>
@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
   bool reduced = false, kmeans_z = false, gphom = true, copa = true;
   const TrainConfig def = atcTrainConfig();
   double max_seconds = -1;
-  int max_iter = -1, batches = 400;
+  int max_iter = -1, batches = 1000;
   unsigned long seed = def.seed;
   int batch = def.batch_size, hyper_every = def.hyper_every;
   double gamma = def.natgrad_gamma_start, gamma_end = def.natgrad_gamma_end, gphom_gamma = 0.03,
