@@ -1173,8 +1173,12 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
     cairn::QoS q;
     q.best_effort();
     auto sample = std::shared_ptr<void>(ts.create(), ts.destroy);
+    // The readers live in a participant of their own, like an external DDS tool: DDS readers ignore their own
+    // participant, and a publisher serves same-process subscribers intra-process and writes to DDS only for
+    // other participants, so a reader in the node's participant never sees a topic published in this container.
+    if (!observer_) observer_ = cairn::Context::create(cairn::ContextOptions{node_.context().domain_id(), false});
     readers_.push_back(std::make_unique<cairn::DdsReader>(
-        node_.context(), cairn::dds_topic_name(node_.resolve_name(topic)), ts, q,
+        *observer_, cairn::dds_topic_name(node_.resolve_name(topic)), ts, q,
         cairn::DdsEndpointOptions{node_.fully_qualified_name(), false},
         [sample, on = std::move(on), mu = std::make_shared<std::mutex>()](cairn::DdsReader& r) {
           std::lock_guard l(*mu);
@@ -1258,6 +1262,7 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
   bt::monitoring::MonitorSet monitors_;
   std::vector<ComponentSpec> components_;
   std::map<std::string, ListState> lists_;
+  std::shared_ptr<cairn::Context> observer_;  ///< participant of the monitoring readers (declared first: outlives them)
   std::vector<std::unique_ptr<cairn::DdsReader>> readers_;
   std::vector<bt::monitoring::TopicRateMonitor*> rates_;
   std::vector<Restart> restarts_;

@@ -511,6 +511,29 @@ TEST(BtComponent, MonitorDetectsAKilledComponentTheLadderRestartsItAndTheTaskRes
   EXPECT_EQ(d.heard.lastStatus()->state, TS::STATE_RUNNING);
 }
 
+TEST(BtComponent, MonitorSeesATopicPublishedInItsOwnContainer) {
+  // The talker in the executive's own container: /chatter travels intra-process there, and the talker writes to
+  // DDS only for readers of other participants. The rate monitor must still see 20 Hz: no recovery, no alert.
+  Container c("demo_container");
+  cairn::LoadRequest treq{"cairn_demo::Talker", "talker"};
+  treq.parameters["rate_hz"] = 20.0;
+  const auto tl = c.load(treq);
+  if (isSkippable(tl, "cairn_demo::Talker")) GTEST_SKIP() << "built without the demo component: " << tl.error;
+  ASSERT_TRUE(tl.ok) << tl.error;
+  const auto loaded = c.load(monitoredExecutive("demo_container", "20"));
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  Driver d;
+  Texts progress(*d.node, "/bt_test/progress");
+  Texts alerts(*d.node, "/bt/alerts");
+  ASSERT_TRUE(d.exec.spin_until([&] { return progress.size() >= 10; }, 30s)) << "the task never ran";
+  // Longer than the rate monitor's 2 s window and the liveness error time: an unseen topic is an error by then.
+  const auto until = std::chrono::steady_clock::now() + 4s;
+  d.exec.spin_until([&] { return std::chrono::steady_clock::now() >= until; }, 10s);
+  EXPECT_FALSE(findEvent(d, "/restart/RestartComponent", S::RUNNING)) << "healthy: no recovery";
+  EXPECT_FALSE(findEvent(d, "/arbiter/Sequence/Fallback/recover", S::RUNNING)) << "the task was never blocked";
+  EXPECT_EQ(alerts.size(), 0u);
+}
+
 // CPU/RAM of the talker's container (its pid from the container's `pid` parameter, then /proc), the clock offset to
 // the talker's /chatter stamps, and configurations switched over bt/configuration: in "charging" the talker is not
 // required, so killing it restarts nothing until the robot is back in "operating".
