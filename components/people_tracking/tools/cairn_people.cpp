@@ -85,10 +85,13 @@ void usage() {
       "  train --kind adaboost|svm [--features arras14@1|stuede5@1] [--scenes 1500] [--seed 1] [--data CSV[,CSV]] --out FILE\n"
       "  eval  --model FILE [--scenes 500] [--seed 1000003] [--data CSV] [--json]\n"
       "  gen-train [--worlds apartment,office,warehouse,open] [--episodes 200] [--seed 1] [--scans-per-episode 6] [--walker-area 5]\n"
-      "            [--scene-generator N] -o FILE\n"
+      "            [--max-walkers N] [--scene-generator N] -o FILE\n"
       "  bench --world auto --trajectories FILE [--robot-path FILE] [--seed N] [--duration S] [--max-people N]\n"
-      "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S] [--dump DIR] [--json]\n"
-      "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--json]");
+      "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S]\n"
+      "        [--reid-window S] [--publish-coast S] [--split-scans K] [--dump DIR] [--json]\n"
+      "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--robot follow|route]\n"
+      "             [--keep-spurs] [--follow-distance M] [--fov-deg 360] [--model FILE] [--heading-drift R]\n"
+      "             [--scale-error E] [--max-duration S] [--json]");
 }
 
 // Comma-separated list of labelled-cluster CSV files ("" = none).
