@@ -144,6 +144,7 @@ std::optional<LocalResult> LocalSlam::addScan(double stamp, const RangeData& dat
       last_inserted_pose_ = pose;  // the motion filter runs as if it had been inserted
       last_inserted_stamp_ = stamp;
     }
+    r.held = true;
     held_.push_back({r, insert_it});
     if (static_cast<int>(held_.size()) >= options_.lost_scans) {
       r.lost = true;

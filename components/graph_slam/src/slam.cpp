@@ -73,12 +73,8 @@ void GraphSlam::Impl::restartLost() {
     for (SlamSubmap& sm : submaps)
       if (sm.trajectory == trajectory) sm.finished = true;
     ++trajectory;
-    startTrajectory();
-  } else {
-    local = std::make_unique<LocalSlam>(options.local);  // localization (or nothing mapped yet): fresh tracker
-    cov_since_loop.setZero();
-    pending_global.clear();
   }
+  startTrajectory();  // localization (or nothing mapped yet in this trajectory): only a fresh local tracker
   linked = nodes.empty();
   restart_anchor = current_pose;
   held_scans.clear();  // LocalSlam discarded the held-back scans
@@ -123,7 +119,7 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
     for (std::size_t i = 0; i < r->flushed.size(); ++i)
       if (r->flushed[i].inserted) takeNode(r->flushed[i], held_scans[i], update);
   if (!r->flushed.empty()) held_scans.clear();
-  if (r->unmatched) held_scans.push_back(scan);
+  if (r->held) held_scans.push_back(scan);
   if (options.localization_only) {
     localizeScan(*r, scan, update);
     return update;

@@ -189,6 +189,7 @@ TEST(LocalSlam, UnmatchedScansAreHeldBackThenFlushedOrReportedLost) {
   auto odd = slam.addScan(t += 0.1, other, still);
   ASSERT_TRUE(odd);
   EXPECT_TRUE(odd->unmatched) << odd->match_score;
+  EXPECT_TRUE(odd->held);
   EXPECT_FALSE(odd->inserted);
   EXPECT_FALSE(odd->lost);
   const std::size_t inserted_before = slam.scansInserted();
@@ -220,5 +221,6 @@ TEST(LocalSlam, UnmatchedScansAreHeldBackThenFlushedOrReportedLost) {
   auto r = plain.addScan(2.0, other, still);
   ASSERT_TRUE(r);
   EXPECT_TRUE(r->unmatched);
+  EXPECT_FALSE(r->held);
   EXPECT_TRUE(r->inserted);
 }

@@ -77,6 +77,9 @@ struct LocalResult {
   /// Score below unmatched_score after recovery: held back, not inserted (yet); `flushed` of a later result
   /// or discarded when the robot is lost.
   bool unmatched = false;
+  /// Unmatched and held back (lost_scans > 0): it comes back in a later result's `flushed`, or is discarded when
+  /// the robot is lost. With lost detection off, unmatched scans are inserted at once and never held.
+  bool held = false;
   /// lost_scans consecutive unmatched scans ended with this one. The caller decides (GraphSlam starts a new
   /// trajectory and searches globally); the counter restarts.
   bool lost = false;
