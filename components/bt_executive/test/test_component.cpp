@@ -404,6 +404,13 @@ cairn::LoadRequest monitoredExecutive(const std::string& container, const std::s
   return req;
 }
 
+/// cairn_demo::Talker as /talker publishing at rate_hz (its launch parameter).
+cairn::LoadRequest talkerRequest(double rate_hz) {
+  cairn::LoadRequest req{"cairn_demo::Talker", "talker"};
+  req.parameters["rate_hz"] = rate_hz;
+  return req;
+}
+
 bool isSkippable(const cairn::LoadResult& r, const std::string& cls) {
   return !r.ok && r.error.find(cls) != std::string::npos &&
          (r.error.find("not found") != std::string::npos || r.error.find("unknown component class") != std::string::npos);
@@ -466,8 +473,7 @@ TEST(BtComponent, RuntimeNodesCheckParametersCallServicesAndNavigateInTheSimulat
 TEST(BtComponent, MonitorDetectsAKilledComponentTheLadderRestartsItAndTheTaskResumes) {
   // The talker in a container of its own; the executive monitors /chatter's rate and /talker's liveness.
   Container demo("demo_container");
-  cairn::LoadRequest treq{"cairn_demo::Talker", "talker"};
-  treq.parameters["rate_hz"] = 20.0;  // launch parameters, which the restart must restore (the default is 10 Hz)
+  cairn::LoadRequest treq = talkerRequest(20.0);  // launch parameters, which the restart must restore (default 10 Hz)
   treq.parameters["text"] = std::string("launched");
   const auto tl = demo.load(treq);
   if (isSkippable(tl, "cairn_demo::Talker")) GTEST_SKIP() << "built without the demo component: " << tl.error;
@@ -515,9 +521,7 @@ TEST(BtComponent, MonitorSeesATopicPublishedInItsOwnContainer) {
   // The talker in the executive's own container: /chatter travels intra-process there, and the talker writes to
   // DDS only for readers of other participants. The rate monitor must still see 20 Hz: no recovery, no alert.
   Container c("demo_container");
-  cairn::LoadRequest treq{"cairn_demo::Talker", "talker"};
-  treq.parameters["rate_hz"] = 20.0;
-  const auto tl = c.load(treq);
+  const auto tl = c.load(talkerRequest(20.0));
   if (isSkippable(tl, "cairn_demo::Talker")) GTEST_SKIP() << "built without the demo component: " << tl.error;
   ASSERT_TRUE(tl.ok) << tl.error;
   const auto loaded = c.load(monitoredExecutive("demo_container", "20"));
@@ -539,9 +543,7 @@ TEST(BtComponent, MonitorSeesATopicPublishedInItsOwnContainer) {
 // required, so killing it restarts nothing until the robot is back in "operating".
 TEST(BtComponent, ResourceAndClockMonitorsAlertAndConfigurationsSelectMonitors) {
   Container demo("res_container");
-  cairn::LoadRequest treq{"cairn_demo::Talker", "talker"};
-  treq.parameters["rate_hz"] = 20.0;
-  const auto tl = demo.load(treq);
+  const auto tl = demo.load(talkerRequest(20.0));
   if (isSkippable(tl, "cairn_demo::Talker")) GTEST_SKIP() << "built without the demo component: " << tl.error;
   ASSERT_TRUE(tl.ok) << tl.error;
 
