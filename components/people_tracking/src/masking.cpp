@@ -11,7 +11,13 @@ double personRadius(double leg_separation, const MaskParams& params) {
   return std::max(params.min_radius, 0.5 * leg_separation + params.leg_radius + params.margin);
 }
 
-std::size_t maskScan(LaserScan& scan, const std::vector<MaskCircle>& circles) {
+MaskMode parseMaskMode(const std::string& value, const std::string& key) {
+  if (value == "tangents") return MaskMode::kTangents;
+  if (value == "inside") return MaskMode::kReturnsInside;
+  throw InputError(key + " must be tangents or inside, got '" + value + "'");
+}
+
+std::size_t maskScan(LaserScan& scan, const std::vector<MaskCircle>& circles, MaskMode mode) {
   validateScan(scan);
   std::size_t masked = 0;
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -21,10 +27,12 @@ std::size_t maskScan(LaserScan& scan, const std::vector<MaskCircle>& circles) {
     const double bearing = std::atan2(c.center.y(), c.center.x());
     for (std::size_t i = 0; i < scan.ranges.size(); ++i) {
       const double diff = std::remainder(scan.angle(i) - bearing, 2.0 * M_PI);
-      if (std::abs(diff) <= half && !std::isnan(scan.ranges[i])) {
-        scan.ranges[i] = nan;
-        ++masked;
-      }
+      if (std::abs(diff) > half || std::isnan(scan.ranges[i])) continue;
+      if (mode == MaskMode::kReturnsInside &&
+          (!scan.valid(i) || (scan.point(i) - c.center).squaredNorm() > c.radius * c.radius))
+        continue;
+      scan.ranges[i] = nan;
+      ++masked;
     }
   }
   return masked;

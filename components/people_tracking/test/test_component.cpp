@@ -497,6 +497,9 @@ TEST(PeopleTrackerComponent, LaunchSpecValidatesItsParameters) {
   EXPECT_NE(e.find("parameter 'use_odom' expects bool"), std::string::npos) << e;
   e = launchError("{tracker.association: kalman}");
   EXPECT_NE(e.find("'tracker.association' must be gnn or jpda, got 'kalman'"), std::string::npos) << e;
+  EXPECT_EQ(launchError("{mask.mode: inside}"), "");
+  e = launchError("{mask.mode: everything}");
+  EXPECT_NE(e.find("'mask.mode' must be tangents or inside, got 'everything'"), std::string::npos) << e;
   e = launchError("{model_file: no_such_model.yml}");
   EXPECT_NE(e.find("model_file: 'no_such_model.yml' not found"), std::string::npos) << e;
   e = launchError("{tracker.no_such_param: 1}");

@@ -54,3 +54,27 @@ TEST(Masking, WrapsAroundBehindTheSensorAndHandlesInsideCase) {
   LaserScan bad;
   EXPECT_THROW(maskScan(bad, {}), InputError);
 }
+
+TEST(Masking, InsideModeKeepsBeamsThatPassTheCircle) {
+  // A person (circle r 0.4 at 2 m) in front of a wall at 5 m: beams between the tangents that end on the person
+  // (range 1.7-2.3 m) are masked in both modes; beams that pass beside the legs and end on the wall, and beams
+  // that end on something in front of the person (1 m), are kept by kReturnsInside only.
+  LaserScan s = fullScan();
+  const MaskCircle c{{2.0, 0.0}, 0.4};
+  std::size_t on_person = 0, between = 0;
+  for (std::size_t i = 0; i < s.ranges.size(); ++i) {
+    const double a = s.angle(i);
+    if (std::abs(a) > std::asin(0.2)) continue;
+    ++between;
+    if (i % 3 == 0) s.ranges[i] = 1.0f;                   // an obstacle in front of the person
+    else if (i % 3 == 1) s.ranges[i] = static_cast<float>(2.0 * std::cos(a)), ++on_person;  // a leg (inside)
+  }                                                        // i % 3 == 2: the wall at 5 m, between the legs
+  LaserScan t = s;
+  EXPECT_EQ(maskScan(s, {c}, MaskMode::kTangents), between);
+  EXPECT_EQ(maskScan(t, {c}, MaskMode::kReturnsInside), on_person);
+  for (std::size_t i = 0; i < t.ranges.size(); ++i)
+    EXPECT_EQ(std::isnan(t.ranges[i]), std::abs(t.angle(i)) <= std::asin(0.2) && i % 3 == 1) << i;
+  EXPECT_EQ(parseMaskMode("inside", "k"), MaskMode::kReturnsInside);
+  EXPECT_EQ(parseMaskMode("tangents", "k"), MaskMode::kTangents);
+  EXPECT_THROW(parseMaskMode("all", "mask.mode"), InputError);
+}

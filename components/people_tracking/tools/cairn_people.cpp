@@ -13,7 +13,7 @@
 
 #include "cairn/people_tracking/classifier.hpp"
 #include "tool_bench.hpp"
-#include "tool_mask_bench.hpp"
+#include "mask_bench.hpp"
 #ifdef CAIRN_PEOPLE_SIM
 #include "sim_training.hpp"
 #endif
@@ -90,8 +90,8 @@ void usage() {
       "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S]\n"
       "        [--reid-window S] [--publish-coast S] [--split-scans K] [--dump DIR] [--json]\n"
       "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--robot follow|route]\n"
-      "             [--keep-spurs] [--follow-distance M] [--fov-deg 360] [--model FILE] [--heading-drift R]\n"
-      "             [--scale-error E] [--max-duration S] [--json]");
+      "             [--keep-spurs] [--follow-distance M] [--fov-deg 360] [--mask tangents|inside] [--model FILE]\n"
+      "             [--heading-drift R] [--scale-error E] [--max-duration S] [--json]");
 }
 
 // Comma-separated list of labelled-cluster CSV files ("" = none).

@@ -8,7 +8,7 @@
 // to NaN by the people pipeline (detectLegs -> PeopleTracker::updateLegs -> GuideTracker -> maskScan). Both
 // trajectories are scored against ground truth in the same run. Tool only: the core does not depend on the SLAM
 // or the simulator.
-#include "tool_mask_bench.hpp"
+#include "mask_bench.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -30,28 +30,10 @@
 
 namespace gs = cairn::graph_slam;
 namespace sim = cairn::sim;
-using namespace cairn::people_tracking;
 
+namespace cairn::people_tracking {
 namespace {
 
-struct MaskBenchParams {
-  std::string world = "apartment";
-  std::string route = "home_tour";
-  std::uint64_t seed = 1;
-  double speed = 0.5;       // m/s, guide and robot
-  double lead = 1.2;        // m, guide starts this far ahead along the route
-  double max_duration = 400.0;
-  double heading_drift = 0.03;  // rad/m, odometry heading drift (as in the SLAM pipeline test): SLAM must match
-  double scale_error = 0.03;    // odometry scale error
-  bool follow = true;           // robot follows the tracked guide (Yuan's setting); false: drives the route itself
-  bool keep_spurs = false;      // guide walks the route as is (with out-and-back spurs); default: spurs removed
-  double follow_distance = 1.2; // m, the robot stops closer than this to the guide (choice; Yuan gives no value)
-  double max_v = 0.7;           // m/s, following speed limit
-  double max_w = 1.0;           // rad/s
-  std::string model;            // leg classifier ("" = the shipped default AdaBoost model)
-  double fov_deg = 360.0;       // laser field of view (Yuan's robot: a front laser; 180 deg is the closer setting)
-  bool json = false;
-};
 
 const sim::Odometry& nearest(const std::vector<sim::Odometry>& v, double t) {
   auto it = std::lower_bound(v.begin(), v.end(), t, [](const sim::Odometry& o, double s) { return o.stamp < s; });
@@ -60,8 +42,10 @@ const sim::Odometry& nearest(const std::vector<sim::Odometry>& v, double t) {
   return *it;
 }
 
-struct TrajectoryError {
-  double rmse = 0.0, mean = 0.0, max = 0.0;
+struct TrajectoryError : MaskBenchError {
+  // The alignment: world = R (p - ca) + cb for a point p of the SLAM (map) frame.
+  Eigen::Matrix2d R = Eigen::Matrix2d::Identity();
+  Eigen::Vector2d ca = Eigen::Vector2d::Zero(), cb = Eigen::Vector2d::Zero();
 };
 
 // Absolute trajectory error after the least-squares rigid 2D alignment of the SLAM poses to the truth.
@@ -95,6 +79,35 @@ TrajectoryError trajectoryError(const std::vector<gs::StampedPose>& traj, const 
   }
   e.rmse = std::sqrt(sum2 / double(a.size()));
   e.mean = sum / double(a.size());
+  e.R = R;
+  e.ca = ca;
+  e.cb = cb;
+  return e;
+}
+
+// Map errors of a SLAM map against the simulator's static geometry (Yuan §3.2.2, Figs. 3.4-3.6: with the guide's
+// legs in the scans the map gets leg imprints, false obstacles on which NF1 finds no path). An occupied cell
+// (p >= occupied_thresh) whose centre, aligned to the world with the trajectory alignment, lies farther than
+// `tolerance` from every wall, door and piece of furniture is spurious; spurious cells within `guide_radius` of
+// the guide's true path are leg imprints.
+MaskBenchMap mapError(const gs::OccupancyGrid& map, const TrajectoryError& align, const sim::Simulator& s,
+                  const std::vector<Eigen::Vector2d>& guide_path, double occupied_thresh = 0.65,
+                  double tolerance = 0.15, double guide_radius = 0.5) {
+  MaskBenchMap e;
+  for (int y = 0; y < map.height; ++y)
+    for (int x = 0; x < map.width; ++x) {
+      if (map.at(x, y) < 100.0 * occupied_thresh) continue;  // unknown (-1) and free cells
+      ++e.occupied;
+      const Eigen::Vector2d c = map.origin + map.resolution * Eigen::Vector2d(x + 0.5, y + 0.5);
+      const Eigen::Vector2d w = align.R * (c - align.ca) + align.cb;
+      if (s.obstacleClearance({w.x(), w.y()}, 2.0 * tolerance) <= tolerance) continue;
+      ++e.spurious;
+      for (const auto& g : guide_path)
+        if ((g - w).squaredNorm() < guide_radius * guide_radius) {
+          ++e.imprints;
+          break;
+        }
+    }
   return e;
 }
 
@@ -121,7 +134,9 @@ std::vector<sim::Vec2> withoutSpurs(std::vector<sim::Vec2> r) {
   return r;
 }
 
-int run(const MaskBenchParams& p) {
+}  // namespace
+
+MaskBenchResult runMaskBench(const MaskBenchParams& p) {
   sim::World world = sim::loadWorld(sim::resolveWorldPath(p.world));
   const auto rt = world.routes.find(p.route);
   if (rt == world.routes.end() || rt->second.size() < 2)
@@ -171,6 +186,7 @@ int run(const MaskBenchParams& p) {
   double travelled = 0.0, guide_distance_sum = 0.0;
   int stall_run = 0, recovery_scans = 0;
   std::size_t recoveries = 0;
+  std::vector<Eigen::Vector2d> guide_path;  // the guide's true positions at the scans (map-error diagnostics)
   std::deque<Eigen::Vector2d> trail;  // the guide's tracked positions (odometry frame) still ahead of the robot
   sim::SimOutput out;
   std::size_t next_scan = 0;
@@ -198,7 +214,7 @@ int run(const MaskBenchParams& p) {
       const GuideStatus st = guider.update(tracks, sensor, scan.stamp);
       sim::LaserScan filtered = scan;
       if (st.state == GuideState::kTracking && st.track) {
-        masked_beams += maskScan(ls, {{sensor.inverseTransform(st.track->position()), personRadius(st.track->leg_separation)}});
+        masked_beams += maskScan(ls, {{sensor.inverseTransform(st.track->position()), personRadius(st.track->leg_separation)}}, p.mask);
         filtered.ranges = ls.ranges;
         ++tracking_scans;
         if (trail.empty() || (trail.back() - st.track->position()).norm() > 0.1) trail.push_back(st.track->position());
@@ -208,6 +224,7 @@ int run(const MaskBenchParams& p) {
       // Ground-truth diagnostics: is the guide in Yuan's field (front semicircle, 8 m) of the robot?
       if (!s.people().empty()) {
         const sim::Vec2 g = s.people().front().position;
+        guide_path.emplace_back(g.x, g.y);
         const double dx = g.x - truth.x, dy = g.y - truth.y;
         const double ahead = std::cos(truth.theta) * dx + std::sin(truth.theta) * dy;
         guide_in_field += ahead > 0.0 && std::hypot(dx, dy) < 8.0;
@@ -267,9 +284,36 @@ int run(const MaskBenchParams& p) {
     odom_traj.push_back({sc.stamp, gs::Pose2{{o.x, o.y}, o.theta}});
   }
   const TrajectoryError eo = trajectoryError(odom_traj, out.ground_truth);
-  const double ratio = er.rmse > 0 ? em.rmse / er.rmse : 0.0;
-  const double guide_frac = double(tracking_scans) / double(out.scans.size());
+  const MaskBenchMap mr = mapError(raw.map(), er, s, guide_path), mm = mapError(masked.map(), em, s, guide_path);
+  MaskBenchResult r;
+  r.duration = s.time();
+  r.scans = out.scans.size();
+  r.travelled = travelled;
   const double n_scans = double(out.scans.size());
+  r.guide_in_field = double(guide_in_field) / n_scans;
+  r.guide_mean_distance = guide_distance_sum / n_scans;
+  r.stalled = double(stalled_scans) / n_scans;
+  r.recovery_scans = recoveries;
+  r.guide_tracked = double(tracking_scans) / n_scans;
+  r.masked_beams_per_tracked_scan = tracking_scans ? double(masked_beams) / double(tracking_scans) : 0.0;
+  r.odometry = eo;
+  r.unmasked = er;
+  r.masked = em;
+  r.map_unmasked = mr;
+  r.map_masked = mm;
+  return r;
+}
+
+namespace {
+
+int printMaskBench(const MaskBenchParams& p, const MaskBenchResult& r) {
+  const double ratio = r.unmasked.rmse > 0 ? r.masked.rmse / r.unmasked.rmse : 0.0;
+  const char* mask = p.mask == MaskMode::kTangents ? "tangents" : "inside";
+  const auto& eo = r.odometry;
+  const auto& er = r.unmasked;
+  const auto& em = r.masked;
+  const auto& mr = r.map_unmasked;
+  const auto& mm = r.map_masked;
   if (p.json) {
     std::printf(
         "{\"world\": \"%s\", \"route\": \"%s\", \"robot\": \"%s\", \"seed\": %llu, \"speed\": %.2f, \"duration_s\": %.1f, "
@@ -278,19 +322,24 @@ int run(const MaskBenchParams& p) {
         "\"odometry\": {\"ate_rmse\": %.4f, \"ate_mean\": %.4f, \"ate_max\": %.4f}, "
         "\"slam_unmasked\": {\"ate_rmse\": %.4f, \"ate_mean\": %.4f, \"ate_max\": %.4f}, "
         "\"slam_masked\": {\"ate_rmse\": %.4f, \"ate_mean\": %.4f, \"ate_max\": %.4f}, "
-        "\"masked_over_unmasked\": %.3f, \"reduction_percent\": %.1f}\n",
+        "\"masked_over_unmasked\": %.3f, \"reduction_percent\": %.1f, \"mask\": \"%s\", "
+        "\"map_unmasked\": {\"occupied_cells\": %zu, \"spurious_cells\": %zu, \"leg_imprint_cells\": %zu}, "
+        "\"map_masked\": {\"occupied_cells\": %zu, \"spurious_cells\": %zu, \"leg_imprint_cells\": %zu}}\n",
         p.world.c_str(), p.route.c_str(), p.follow ? "follow" : "route", static_cast<unsigned long long>(p.seed), p.speed,
-        s.time(), out.scans.size(), travelled, double(guide_in_field) / n_scans, guide_distance_sum / n_scans,
-        double(stalled_scans) / n_scans, recoveries, guide_frac, tracking_scans ? double(masked_beams) / double(tracking_scans) : 0.0, eo.rmse, eo.mean, eo.max,
-        er.rmse, er.mean, er.max, em.rmse, em.mean, em.max, ratio, 100.0 * (1.0 - ratio));
+        r.duration, r.scans, r.travelled, r.guide_in_field, r.guide_mean_distance, r.stalled, r.recovery_scans,
+        r.guide_tracked, r.masked_beams_per_tracked_scan, eo.rmse, eo.mean, eo.max, er.rmse, er.mean, er.max, em.rmse,
+        em.mean, em.max, ratio, 100.0 * (1.0 - ratio), mask, mr.occupied, mr.spurious, mr.imprints, mm.occupied,
+        mm.spurious, mm.imprints);
   } else {
     std::printf("%s / %s, robot %s, seed %llu: %.0f s, %zu scans, robot drove %.1f m, guide in the front field in "
                 "%.0f %% (mean distance %.2f m), tracked and masked in %.0f %% of the scans\n",
                 p.world.c_str(), p.route.c_str(), p.follow ? "follows the guide" : "drives the route",
-                static_cast<unsigned long long>(p.seed), s.time(), out.scans.size(), travelled,
-                100.0 * double(guide_in_field) / n_scans, guide_distance_sum / n_scans, 100.0 * guide_frac);
-    std::printf("  position error (ATE RMSE): odometry %.3f m, SLAM unmasked %.3f m, SLAM masked %.3f m (ratio %.2f, "
-                "%.0f %% lower)\n", eo.rmse, er.rmse, em.rmse, ratio, 100.0 * (1.0 - ratio));
+                static_cast<unsigned long long>(p.seed), r.duration, r.scans, r.travelled, 100.0 * r.guide_in_field,
+                r.guide_mean_distance, 100.0 * r.guide_tracked);
+    std::printf("  position error (ATE RMSE): odometry %.3f m, SLAM unmasked %.3f m, SLAM masked (%s) %.3f m (ratio "
+                "%.2f, %.0f %% lower)\n", eo.rmse, er.rmse, mask, em.rmse, ratio, 100.0 * (1.0 - ratio));
+    std::printf("  map: spurious occupied cells unmasked %zu (leg imprints %zu), masked %zu (leg imprints %zu)\n",
+                mr.spurious, mr.imprints, mm.spurious, mm.imprints);
   }
   return 0;
 }
@@ -328,10 +377,13 @@ int runMaskBenchVerb(int argc, char** argv) {
     else if (a == "--follow-distance") p.follow_distance = number(value());
     else if (a == "--fov-deg") p.fov_deg = number(value());
     else if (a == "--model") p.model = value();
+    else if (a == "--mask") p.mask = parseMaskMode(value(), "--mask");
     else throw InputError("unknown mask-bench option '" + a + "'");
   }
   if (!(p.speed > 0.05 && p.speed < 3.0)) throw InputError("--speed must be in (0.05, 3) m/s");
   if (!(p.fov_deg >= 30.0 && p.fov_deg <= 360.0)) throw InputError("--fov-deg must be in [30, 360]");
   if (!(p.follow_distance > 0.3 && p.follow_distance < 5.0)) throw InputError("--follow-distance must be in (0.3, 5) m");
-  return run(p);
+  return printMaskBench(p, runMaskBench(p));
 }
+
+}  // namespace cairn::people_tracking

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 #include "cairn/people_tracking/scan.hpp"
@@ -25,8 +26,21 @@ struct MaskCircle {
   double radius = 0.0;
 };
 
-// Beams whose bearing lies within asin(r / d) of the circle's bearing are set to NaN (ROS: invalid reading).
+enum class MaskMode {
+  // Yuan §3.2.1: every beam between the two tangents is invalid, whatever it hit.
+  kTangents,
+  // Only beams whose return lies inside the circle (cairn's variant, not in the thesis): beams that pass beside
+  // or between the person's legs, or end at something in front of the person, keep their static return, so
+  // the mask takes no wall or furniture out of the scan. A beam without return (NaN/inf) is kept as it is.
+  kReturnsInside,
+};
+
+// Beams whose bearing lies within asin(r / d) of the circle's bearing are set to NaN (ROS: invalid reading);
+// with kReturnsInside only those of them whose return point lies inside the circle.
 // A sensor inside a circle masks the half plane towards its centre. Returns the number of beams masked.
-std::size_t maskScan(LaserScan& scan, const std::vector<MaskCircle>& circles);
+std::size_t maskScan(LaserScan& scan, const std::vector<MaskCircle>& circles, MaskMode mode = MaskMode::kTangents);
+
+// "tangents" | "inside"; throws InputError naming `key` otherwise.
+MaskMode parseMaskMode(const std::string& value, const std::string& key);
 
 }  // namespace cairn::people_tracking
