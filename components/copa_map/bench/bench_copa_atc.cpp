@@ -3,9 +3,12 @@
 // NLPD, 95 % coverage, train and predict time).
 //   bench_copa_atc [--data DIR] [--reduced] [--batches N] [--max-seconds S] [--max-iterations N]
 //                  [--kmeans-inducing] [--no-gphom] [--seed N] [--batch B] [--hyper-every K] [--gamma G]
-//                  [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z]
-// Defaults: atcTrainConfig() (copa_map.hpp). --reduced: every 4th of the authors' inducing points and exactly
-// --batches mini-batches (default 1000, no time limit: reducedTrainConfig), the configuration of the CI test.
+//                  [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z] [--decay constant|invsqrt|plateau]
+//                  [--decay-tau STEPS] [--patience E] [--elbo-floor F] [--adam-lr-end LR] [--average]
+//                  [--z-stride K] [--epoch-nrmse]
+// Defaults: atcTrainConfig() (copa_map.hpp). --reduced: every 4th (--z-stride) of the authors' inducing points and
+// exactly --batches mini-batches (default 1000, no time limit: reducedTrainConfig), the configuration of the CI
+// test. --epoch-nrmse prints the test NRMSE after every epoch (one prediction per epoch, diagnostics only).
 #include <time.h>
 
 #include <chrono>
@@ -49,7 +52,10 @@ int main(int argc, char** argv) {
   int batch = def.batch_size, hyper_every = def.hyper_every;
   double gamma = def.natgrad_gamma_start, gamma_end = def.natgrad_gamma_end, gphom_gamma = 0.03,
          tolerance = def.tolerance;
-  bool train_z = false;
+  bool train_z = false, epoch_nrmse = false, average = false;
+  std::string decay_name;
+  double decay_tau = -1, elbo_floor = -1, adam_lr_end = -1;
+  int patience = -1, z_stride = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--data" && i + 1 < argc) dir = argv[++i];
@@ -68,9 +74,17 @@ int main(int argc, char** argv) {
     else if (a == "--gamma-end" && i + 1 < argc) gamma_end = std::atof(argv[++i]);
     else if (a == "--tolerance" && i + 1 < argc) tolerance = std::atof(argv[++i]);
     else if (a == "--train-z") train_z = true;
+    else if (a == "--decay" && i + 1 < argc) decay_name = argv[++i];
+    else if (a == "--decay-tau" && i + 1 < argc) decay_tau = std::atof(argv[++i]);
+    else if (a == "--patience" && i + 1 < argc) patience = std::atoi(argv[++i]);
+    else if (a == "--elbo-floor" && i + 1 < argc) elbo_floor = std::atof(argv[++i]);
+    else if (a == "--adam-lr-end" && i + 1 < argc) adam_lr_end = std::atof(argv[++i]);
+    else if (a == "--epoch-nrmse") epoch_nrmse = true;
+    else if (a == "--average") average = true;
+    else if (a == "--z-stride" && i + 1 < argc) z_stride = std::atoi(argv[++i]);
     else {
       std::fprintf(stderr, "usage: %s [--data DIR] [--reduced] [--batches N] [--max-seconds S] [--max-iterations N] "
-                           "[--kmeans-inducing] [--no-gphom] [--no-copa] [--seed N] [--batch B] [--hyper-every K] [--gamma G] [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z]\n", argv[0]);
+                           "[--kmeans-inducing] [--no-gphom] [--no-copa] [--seed N] [--batch B] [--hyper-every K] [--gamma G] [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z] [--decay constant|invsqrt|plateau] [--decay-tau STEPS] [--patience E] [--elbo-floor F] [--adam-lr-end LR] [--epoch-nrmse] [--average] [--z-stride K]\n", argv[0]);
       return 2;
     }
   }
@@ -91,14 +105,23 @@ int main(int argc, char** argv) {
     tc.natgrad_gamma_end = gamma_end;
     if (!reduced) tc.tolerance = tolerance;
     tc.train_inducing = train_z;
-    if (reduced) Z = everyNthRow(Z, 4);  // CI configuration: every 4th authors' inducing point
+    if (!decay_name.empty()) tc.step_decay = stepDecayFromName(decay_name);
+    if (decay_tau >= 0) tc.decay_tau = decay_tau;
+    if (patience >= 1) tc.patience = patience;
+    if (elbo_floor >= 0) tc.elbo_floor = elbo_floor;
+    if (adam_lr_end > 0) tc.adam_lr_end = adam_lr_end;
+    if (average) tc.average_iterates = true;
+    // CI configuration: every 4th authors' inducing point unless --z-stride says otherwise.
+    if (z_stride > 1 || reduced) Z = everyNthRow(Z, z_stride > 0 ? z_stride : 4);
     std::printf("ATC split: %ld train, %ld test points; %ld inducing points (%s)%s\n", (long)train.X.rows(),
                 (long)test.X.rows(), kmeans_z ? (long)std::floor(cfg.alpha_ind * train.X.rows()) : (long)Z.rows(),
                 kmeans_z ? "Δ-weighted k-means" : "authors' Z", reduced ? ", reduced configuration" : "");
-    std::printf("config: batch %d, natgrad γ %.2f -> %.2f (GP-Hom %.2f), Adam every %d steps, at most %d batches and "
-                "%.0f s per GP model, tolerance %g, seed %lu, GEMM %s\n", batch, gamma, tc.natgrad_gamma_end,
-                gphom_gamma, hyper_every, tc.max_iterations, tc.max_seconds, tc.tolerance, seed,
-                activeGemmKernel().c_str());
+    std::printf("config: batch %d, natgrad γ %.2f -> %.2f (GP-Hom %.2f), Adam %g -> %g every %d steps, then %s decay "
+                "(tau %g)%s, at most %d batches and %.0f s per GP model, tolerance %g (floor %g, patience %d), seed %lu, "
+                "GEMM %s\n", batch, gamma, tc.natgrad_gamma_end, gphom_gamma, tc.adam_lr_start, tc.adam_lr_end,
+                hyper_every, stepDecayName(tc.step_decay), tc.decay_tau,
+                tc.average_iterates ? ", iterate averaging" : "", tc.max_iterations,
+                tc.max_seconds, tc.tolerance, tc.elbo_floor, tc.patience, seed, activeGemmKernel().c_str());
     std::printf("| model      |  NRMSE  | χ² distance  |   NLPD   | cov95  | train [s] | pred [s] |\n");
     std::printf("|------------|---------|--------------|----------|--------|-----------|----------|\n");
 
@@ -126,8 +149,12 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "; m_f=%ld m_g=%ld; init %.1f s\n", (long)cm.model().latents()[0].Z.rows(),
                  (long)cm.model().latents()[1].Z.rows(), now() - t0);
     tc.progress = [](int it, double elbo, double s) {
-      if (it % 10 == 0) std::fprintf(stderr, "  copa it %d elbo/n %.4f  %.0f s\n", it, elbo, s);
+      if (it % 50 == 0) std::fprintf(stderr, "  copa it %d elbo/n %.4f  %.0f s\n", it, elbo, s);
     };
+    if (epoch_nrmse)  // diagnostics: test NRMSE of the model after every epoch (costs one prediction each)
+      tc.on_epoch = [&cm, &test](int e, double elbo) {
+        std::fprintf(stderr, "  epoch %d elbo/n %.5f test NRMSE %.4f\n", e, elbo, nrmse(cm.predict(test.X).mean, test.y));
+      };
     const double c0 = cpuNow();
     const TrainReport rep = cm.train(train.X, train.y, tc);
     const double train_cpu = cpuNow() - c0;
@@ -135,10 +162,10 @@ int main(int argc, char** argv) {
     const RatePrediction pcm = cm.predict(test.X);
     const Eigen::VectorXd lcm = cm.logPredictiveDensity(test.X, test.y);
     const double pt = now() - t1;
-    std::fprintf(stderr, "CoPA-Map: %d iterations, %d epochs, %s; training %.1f s wall, %.1f CPU-s (%.2f CPU-s "
-                 "per batch)\n  epoch-mean ELBO/n:", rep.iterations, rep.epochs, rep.message.c_str(), rep.seconds,
-                 train_cpu, train_cpu / std::max(1, rep.iterations));
-    for (double e : rep.epoch_elbo) std::fprintf(stderr, " %.4f", e);
+    std::fprintf(stderr, "CoPA-Map: %d iterations, %d epochs, %s; final γ %.4f, %d iterates averaged; training %.1f s wall, %.1f CPU-s "
+                 "(%.2f CPU-s per batch)\n  epoch-mean ELBO/n:", rep.iterations, rep.epochs, rep.message.c_str(),
+                 rep.final_gamma, rep.averaged_iterates, rep.seconds, train_cpu, train_cpu / std::max(1, rep.iterations));
+    for (double e : rep.epoch_elbo) std::fprintf(stderr, " %.5f", e);
     std::fprintf(stderr, "\n");
     row("CoPA-Map", pcm, test.y, &lcm, t1 - t0, pt);
     }
@@ -151,6 +178,7 @@ int main(int argc, char** argv) {
       // space): start tiny and ramp up linearly over the first 100 steps.
       tc.natgrad_gamma_start = 1e-3;
       tc.natgrad_gamma_end = gphom_gamma;
+      tc.on_epoch = nullptr;
       tc.progress = [](int it, double elbo, double s) {
         if (it % 10 == 0) std::fprintf(stderr, "  gphom it %d elbo/n %.4f  %.0f s\n", it, elbo, s);
       };

@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <stdexcept>
@@ -564,22 +565,25 @@ double SvgpModel::naturalGradientStep(int k, const ElboEvaluation& ev, double sc
   const Eigen::VectorXd target1 = scale * (pl.b - 2.0 * pl.Q * lat.mu);
   for (int attempt = 0; attempt < 12; ++attempt, gamma *= 0.5) {
     Eigen::MatrixXd Ln = (1.0 - gamma) * Lambda + gamma * target;
-    Ln = 0.5 * (Ln + Ln.transpose()).eval();
-    const Eigen::VectorXd t1 = (1.0 - gamma) * theta1 + gamma * target1;
-    // Lower-triangular root of S' = Λ'⁻¹ from the Cholesky factor of the reversed precision.
-    Eigen::MatrixXd M;
-    if (!choleskyLower(Ln.reverse(), M)) continue;
-    const Eigen::MatrixXd Minv = lowerInverse(M);
-    Eigen::MatrixXd Lnew = Minv.transpose().reverse();
-    Lnew.triangularView<Eigen::StrictlyUpper>().setZero();
-    const Eigen::VectorXd mu_new = Lnew * (Lnew.transpose() * t1);
-    if (!Lnew.allFinite() || !mu_new.allFinite()) continue;
-    lat.L = std::move(Lnew);
-    lat.mu = mu_new;
-    lat.precision = std::move(Ln);
-    return gamma;
+    if (setNaturalParams(lat, std::move(Ln), (1.0 - gamma) * theta1 + gamma * target1)) return gamma;
   }
   return 0.0;
+}
+
+bool setNaturalParams(LatentGp& lat, Eigen::MatrixXd Lambda, const Eigen::VectorXd& theta1) {
+  Lambda = 0.5 * (Lambda + Lambda.transpose()).eval();
+  // Lower-triangular root of S = Λ⁻¹ from the Cholesky factor of the reversed precision.
+  Eigen::MatrixXd M;
+  if (!choleskyLower(Lambda.reverse(), M)) return false;
+  const Eigen::MatrixXd Minv = lowerInverse(M);
+  Eigen::MatrixXd Lnew = Minv.transpose().reverse();
+  Lnew.triangularView<Eigen::StrictlyUpper>().setZero();
+  const Eigen::VectorXd mu_new = Lnew * (Lnew.transpose() * theta1);
+  if (!Lnew.allFinite() || !mu_new.allFinite()) return false;
+  lat.L = std::move(Lnew);
+  lat.mu = mu_new;
+  lat.precision = std::move(Lambda);
+  return true;
 }
 
 LatentMoments SvgpModel::latentMoments(int k, const Eigen::MatrixXd& X) const {
@@ -666,6 +670,86 @@ Eigen::VectorXd SvgpModel::hyperUpperBounds() const {
 
 // ----------------------------------------------------------------------------------------------- training
 
+namespace {
+
+// Running sum of iterates for Polyak–Ruppert averaging: the natural parameters (Λ = S⁻¹, θ1 = S⁻¹μ) of every
+// q(u_k), whose natural-gradient update is a convex combination in exactly these coordinates (so their average
+// is again a valid Gaussian), the unconstrained kernel hyperparameters and the inducing inputs.
+struct IterateSum {
+  std::vector<Eigen::MatrixXd> Lambda, Z;
+  std::vector<Eigen::VectorXd> theta1;
+  Eigen::VectorXd hyper;
+  int count = 0;
+
+  void add(const SvgpModel& model) {
+    const auto& lats = model.latents();
+    if (count == 0) {
+      Lambda.assign(lats.size(), Eigen::MatrixXd());
+      Z.assign(lats.size(), Eigen::MatrixXd());
+      theta1.assign(lats.size(), Eigen::VectorXd());
+      hyper = Eigen::VectorXd::Zero(model.numHyperParams());
+    }
+    for (std::size_t k = 0; k < lats.size(); ++k) {
+      const Eigen::MatrixXd P = precisionOf(lats[k]);
+      const Eigen::VectorXd t = P * lats[k].mu;
+      if (count == 0) {
+        Lambda[k] = P;
+        theta1[k] = t;
+        Z[k] = lats[k].Z;
+      } else {
+        Lambda[k] += P;
+        theta1[k] += t;
+        Z[k] += lats[k].Z;
+      }
+    }
+    hyper += model.hyperParams();
+    ++count;
+  }
+  void merge(const IterateSum& o) {
+    if (o.count == 0) return;
+    if (count == 0) {
+      *this = o;
+      return;
+    }
+    for (std::size_t k = 0; k < Lambda.size(); ++k) {
+      Lambda[k] += o.Lambda[k];
+      theta1[k] += o.theta1[k];
+      Z[k] += o.Z[k];
+    }
+    hyper += o.hyper;
+    count += o.count;
+  }
+  bool apply(SvgpModel& model) const {
+    const double w = 1.0 / count;
+    SvgpModel out = model;
+    for (std::size_t k = 0; k < Lambda.size(); ++k) {
+      out.latents()[k].Z = w * Z[k];
+      if (!setNaturalParams(out.latents()[k], w * Lambda[k], w * theta1[k])) return false;
+    }
+    out.setHyperParams(w * hyper);
+    model = std::move(out);
+    return true;
+  }
+};
+
+}  // namespace
+
+TrainConfig::StepDecay stepDecayFromName(const std::string& name) {
+  if (name == "constant") return TrainConfig::StepDecay::Constant;
+  if (name == "invsqrt") return TrainConfig::StepDecay::InvSqrt;
+  if (name == "plateau") return TrainConfig::StepDecay::Plateau;
+  throw std::invalid_argument("step decay '" + name + "': expected constant, invsqrt or plateau");
+}
+
+const char* stepDecayName(TrainConfig::StepDecay d) {
+  switch (d) {
+    case TrainConfig::StepDecay::InvSqrt: return "invsqrt";
+    case TrainConfig::StepDecay::Plateau: return "plateau";
+    case TrainConfig::StepDecay::Constant: break;
+  }
+  return "constant";
+}
+
 TrainReport trainSvgp(SvgpModel& model, const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
                       const TrainConfig& cfg) {
   TrainReport rep;
@@ -683,7 +767,6 @@ TrainReport trainSvgp(SvgpModel& model, const Eigen::MatrixXd& X, const Eigen::V
   std::mt19937_64 rng(cfg.seed);
   std::vector<Eigen::Index> perm(static_cast<std::size_t>(n));
   std::iota(perm.begin(), perm.end(), 0);
-  std::size_t pos = perm.size();
 
   // Adam state (Kingma & Ba 2014) on the unconstrained hyperparameters; maximizes the ELBO.
   const int np = model.numHyperParams();
@@ -698,24 +781,46 @@ TrainReport trainSvgp(SvgpModel& model, const Eigen::MatrixXd& X, const Eigen::V
     if (cfg.decay_steps <= 0 || it >= cfg.decay_steps) return b;
     return a + (b - a) * static_cast<double>(it) / cfg.decay_steps;  // linear decay (§4.2.5)
   };
+  const Eigen::Index per_epoch = (n + B - 1) / B;
+  // Decay after the linear phase (TrainConfig::step_decay): 1/√k or step decay on a stalled epoch ELBO.
+  const double tau = cfg.decay_tau > 0 ? cfg.decay_tau : static_cast<double>(per_epoch);
+  double plateau_scale = 1.0;
+  auto decay = [&](int it) {
+    switch (cfg.step_decay) {
+      case TrainConfig::StepDecay::InvSqrt:
+        return it <= cfg.decay_steps ? 1.0 : 1.0 / std::sqrt(1.0 + (it - cfg.decay_steps) / tau);
+      case TrainConfig::StepDecay::Plateau:
+        return plateau_scale;
+      case TrainConfig::StepDecay::Constant:
+        break;
+    }
+    return 1.0;
+  };
+  double best_epoch = -std::numeric_limits<double>::infinity();
+  int calm_epochs = 0;
+  // Tail averaging (TrainConfig::average_iterates): sums over the current and the previous epoch.
+  IterateSum avg_cur, avg_prev;
 
   SvgpModel last_good = model;
   double epoch_sum = 0;
   Eigen::Index epoch_count = 0;
-  const Eigen::Index per_epoch = (n + B - 1) / B;
-  Eigen::MatrixXd Xb(B, X.cols());
-  Eigen::VectorXd yb(B);
+  // An epoch is one shuffled partition of the data into per_epoch = ⌈n/B⌉ mini-batches of ⌊n/per_epoch⌋ or
+  // ⌈n/per_epoch⌉ points (≤ B), so every point is seen exactly once per epoch and the epoch's summed expected
+  // log-likelihood is the full-data one (up to the parameter changes within the epoch), not a sample of it.
+  Eigen::MatrixXd Xb;
+  Eigen::VectorXd yb;
+  double epoch_ell = 0, epoch_kl = 0;
   for (int it = 0; it < cfg.max_iterations; ++it) {
-    if (pos + static_cast<std::size_t>(B) > perm.size()) {
-      std::shuffle(perm.begin(), perm.end(), rng);
-      pos = 0;
+    const Eigen::Index bi = epoch_count;  // batch index within the epoch
+    if (bi == 0) std::shuffle(perm.begin(), perm.end(), rng);
+    const Eigen::Index b0 = bi * n / per_epoch, b1 = (bi + 1) * n / per_epoch;
+    Xb.resize(b1 - b0, X.cols());
+    yb.resize(b1 - b0);
+    for (Eigen::Index i = b0; i < b1; ++i) {
+      Xb.row(i - b0) = X.row(perm[static_cast<std::size_t>(i)]);
+      yb[i - b0] = y[perm[static_cast<std::size_t>(i)]];
     }
-    for (Eigen::Index i = 0; i < B; ++i) {
-      Xb.row(i) = X.row(perm[pos + static_cast<std::size_t>(i)]);
-      yb[i] = y[perm[pos + static_cast<std::size_t>(i)]];
-    }
-    pos += static_cast<std::size_t>(B);
-    const double scale = static_cast<double>(n) / static_cast<double>(B);
+    const double scale = static_cast<double>(n) / static_cast<double>(b1 - b0);
     const bool hyper = cfg.train_hyper && it >= cfg.hyper_warmup && np > 0 &&
                        (it - cfg.hyper_warmup) % std::max(1, cfg.hyper_every) == 0;
     const bool zstep = cfg.train_inducing && it >= cfg.hyper_warmup &&
@@ -739,12 +844,13 @@ TrainReport trainSvgp(SvgpModel& model, const Eigen::MatrixXd& X, const Eigen::V
     }
     last_good = model;
     // Natural-gradient step on q(u_f), q(u_g) ...
-    const double gamma = schedule(cfg.natgrad_gamma_start, cfg.natgrad_gamma_end, it);
+    const double gamma = schedule(cfg.natgrad_gamma_start, cfg.natgrad_gamma_end, it) * decay(it);
+    rep.final_gamma = gamma;
     for (int k = 0; k < static_cast<int>(model.latents().size()); ++k) model.naturalGradientStep(k, ev, scale, gamma);
     // ... then Adam on the kernel hyperparameters (§4.2.5).
     if (hyper) {
       ++adam_t;
-      const double lr = schedule(cfg.adam_lr_start, cfg.adam_lr_end, it - cfg.hyper_warmup);
+      const double lr = schedule(cfg.adam_lr_start, cfg.adam_lr_end, it - cfg.hyper_warmup) * decay(it);
       const Eigen::VectorXd g = -ev.hyper_grad / static_cast<double>(n);  // per-point loss gradient
       am = 0.9 * am + 0.1 * g;
       av = 0.999 * av + 0.001 * g.cwiseProduct(g);
@@ -764,22 +870,38 @@ TrainReport trainSvgp(SvgpModel& model, const Eigen::MatrixXd& X, const Eigen::V
       }
     }
     ++rep.iterations;
+    if (cfg.average_iterates && it >= cfg.decay_steps) avg_cur.add(model);
     const double per_point = ev.elbo / static_cast<double>(n);
     if (cfg.progress) cfg.progress(it, per_point, elapsed());
     epoch_sum += per_point;
+    epoch_ell += ev.ell;
+    epoch_kl += ev.kl;
     ++epoch_count;
     if (epoch_count == per_epoch) {
-      const double mean = epoch_sum / static_cast<double>(epoch_count);
+      // Σ_batches E[log p] over the partition minus the mean KL, per point: the full-data ELBO (eq. 4.12).
+      const double mean = (epoch_ell - epoch_kl / static_cast<double>(per_epoch)) / static_cast<double>(n);
       rep.epoch_elbo.push_back(mean);
       ++rep.epochs;
       epoch_sum = 0;
       epoch_count = 0;
+      epoch_ell = epoch_kl = 0;
+      if (avg_cur.count > 0) {
+        avg_prev = std::move(avg_cur);
+        avg_cur = IterateSum();
+      }
       const std::size_t e = rep.epoch_elbo.size();
+      if (cfg.on_epoch) cfg.on_epoch(static_cast<int>(e), mean);
+      if (cfg.step_decay == TrainConfig::StepDecay::Plateau && mean < best_epoch)
+        plateau_scale *= cfg.plateau_factor;
+      best_epoch = std::max(best_epoch, mean);
       if (static_cast<int>(e) >= cfg.min_epochs && e >= 2) {
         const double prev = rep.epoch_elbo[e - 2];
-        if (std::abs(mean - prev) <= cfg.tolerance * std::max(1e-12, std::abs(prev))) {
+        const double ref = std::max({1e-12, std::abs(prev), cfg.elbo_floor});
+        calm_epochs = std::abs(mean - prev) <= cfg.tolerance * ref ? calm_epochs + 1 : 0;
+        if (calm_epochs >= std::max(1, cfg.patience)) {
           rep.converged = true;
-          rep.message = "converged: epoch ELBO change below tolerance";
+          rep.message = "converged: epoch ELBO change below tolerance in " + std::to_string(calm_epochs) +
+                        " consecutive epoch(s)";
           break;
         }
       }
@@ -790,6 +912,14 @@ TrainReport trainSvgp(SvgpModel& model, const Eigen::MatrixXd& X, const Eigen::V
     }
   }
   if (rep.message.empty()) rep.message = "stopped at the iteration limit";
+  if (!rep.diverged && avg_prev.count + avg_cur.count > 0) {
+    avg_prev.merge(avg_cur);
+    rep.averaged_iterates = avg_prev.count;
+    if (!avg_prev.apply(model)) {
+      rep.averaged_iterates = 0;
+      rep.message += "; iterate average not positive definite, kept the last iterate";
+    }
+  }
   rep.final_elbo = rep.epoch_elbo.empty() ? (epoch_count ? epoch_sum / epoch_count : 0.0) : rep.epoch_elbo.back();
   rep.seconds = elapsed();
   return rep;

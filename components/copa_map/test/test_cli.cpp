@@ -55,7 +55,9 @@ TEST(CopaCli, TrainPredictEval) {
   tr.close();
   te.close();
   pts.close();
-  std::ofstream(dir + "/cli_cfg.txt") << "max_iterations = 20\nbatch_size = 300\nperiod_max = 24\n";
+  std::ofstream(dir + "/cli_cfg.txt") << "max_iterations = 20\nbatch_size = 300\nperiod_max = 24\n"
+                                          "step_decay = invsqrt\ndecay_steps = 10\naverage_iterates = 1\n"
+                                          "patience = 2\nelbo_floor = 1\n";
   std::string err;
   ASSERT_EQ(run("train --train " + dir + "/cli_train.csv --config " + dir + "/cli_cfg.txt -o " + dir + "/cli_model.txt", &err), 0) << err;
   ASSERT_EQ(run("predict --model " + dir + "/cli_model.txt --points " + dir + "/cli_pts.csv -o " + dir + "/cli_pred.csv", &err), 0) << err;
@@ -82,4 +84,7 @@ TEST(CopaCli, BadInputIsOneLineAndExitCode2) {
   EXPECT_EQ(run("predict --model " + dir + "/cli_model_bad.txt --points " + dir + "/cli_bad.csv -o " + dir + "/y.csv", &err), 2);
   EXPECT_NE(err.find("version 7 is not supported"), std::string::npos) << err;
   EXPECT_EQ(run("frobnicate", &err), 2);
+  std::ofstream(dir + "/cli_cfg_bad.txt") << "batch_size = 300\nstep_decay = cosine\n";
+  EXPECT_EQ(run("train --train " + dir + "/cli_bad.csv --config " + dir + "/cli_cfg_bad.txt -o " + dir + "/x.txt", &err), 2);
+  EXPECT_EQ(err, "cairn: " + dir + "/cli_cfg_bad.txt:2: step decay 'cosine': expected constant, invsqrt or plateau\n");
 }

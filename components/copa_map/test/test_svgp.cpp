@@ -363,3 +363,125 @@ TEST(CopaSvgp, GemmVariantsAndBatchSplitAgreeWithThePortableSerialOne) {
   EXPECT_LE((one.latent[1].Q - two.latent[1].Q).norm(), 1e-10 * one.latent[1].Q.norm());
   EXPECT_LE((one.latent[0].b - two.latent[0].b).norm(), 1e-10 * one.latent[0].b.norm());
 }
+
+// Step-size schedules after the linear warm-up (TrainConfig::step_decay) and the patience of the convergence
+// test: the γ of the last step follows the documented formula, and training stops only after `patience`
+// consecutive epochs below the tolerance.
+TEST(CopaSvgp, StepDecaySchedulesAndConvergencePatience) {
+  std::mt19937_64 rng(5);
+  const SvgpModel base = heteroModel(rng, 10);
+  const Eigen::MatrixXd X = randomInputs(200, rng);
+  Eigen::VectorXd y(200);
+  for (int i = 0; i < 200; ++i) y[i] = std::sin(X(i, 0)) + 0.3 * std::cos(X(i, 1));
+  TrainConfig tc;
+  tc.batch_size = 50;  // 4 batches per epoch
+  tc.max_iterations = 41;
+  tc.natgrad_gamma_start = 0.4;
+  tc.natgrad_gamma_end = 0.2;
+  tc.decay_steps = 10;
+  tc.tolerance = 0;
+  tc.hyper_every = 2;
+
+  SvgpModel m = base;
+  TrainReport rep = trainSvgp(m, X, y, tc);
+  EXPECT_DOUBLE_EQ(rep.final_gamma, 0.2);  // constant after the linear phase
+  EXPECT_EQ(TrainConfig::StepDecay::Constant, stepDecayFromName(stepDecayName(tc.step_decay)));
+
+  tc.step_decay = TrainConfig::StepDecay::InvSqrt;
+  tc.decay_tau = 5;
+  m = base;
+  rep = trainSvgp(m, X, y, tc);
+  ASSERT_FALSE(rep.diverged) << rep.message;
+  EXPECT_DOUBLE_EQ(rep.final_gamma, 0.2 / std::sqrt(1.0 + (40 - 10) / 5.0));  // last step k = 40
+  tc.decay_tau = 0;  // one epoch = 4 steps
+  m = base;
+  rep = trainSvgp(m, X, y, tc);
+  EXPECT_DOUBLE_EQ(rep.final_gamma, 0.2 / std::sqrt(1.0 + (40 - 10) / 4.0));
+
+  // Plateau: γ halves after every epoch whose mean ELBO is below the best one so far.
+  tc.step_decay = stepDecayFromName("plateau");
+  tc.natgrad_gamma_start = tc.natgrad_gamma_end = 1.0;  // large steps make the epoch ELBO stall and dip
+  tc.adam_lr_start = tc.adam_lr_end = 0.3;
+  tc.max_iterations = 81;  // 20 epochs; the last step (k = 80) comes after all 20 epoch tests
+  m = base;
+  rep = trainSvgp(m, X, y, tc);
+  ASSERT_FALSE(rep.diverged) << rep.message;
+  ASSERT_EQ(rep.epoch_elbo.size(), 20u);
+  int stalls = 0;
+  double best = rep.epoch_elbo[0];
+  for (std::size_t e = 1; e < rep.epoch_elbo.size(); ++e) {
+    stalls += rep.epoch_elbo[e] < best;
+    best = std::max(best, rep.epoch_elbo[e]);
+  }
+  EXPECT_GT(stalls, 0);
+  EXPECT_DOUBLE_EQ(rep.final_gamma, std::pow(0.5, stalls));
+  EXPECT_THROW(stepDecayFromName("cosine"), std::invalid_argument);
+
+  // Patience: with a tolerance every epoch passes, training stops after min_epochs - 1 + patience epochs.
+  tc.step_decay = TrainConfig::StepDecay::Constant;
+  tc.natgrad_gamma_start = tc.natgrad_gamma_end = 0.2;
+  tc.tolerance = 1e3;
+  tc.elbo_floor = 1.0;
+  tc.min_epochs = 2;
+  for (int patience : {1, 3}) {
+    tc.patience = patience;
+    m = base;
+    rep = trainSvgp(m, X, y, tc);
+    EXPECT_TRUE(rep.converged) << rep.message;
+    EXPECT_EQ(rep.epochs, 1 + patience);
+  }
+  // A tolerance nothing meets never stops early.
+  tc.tolerance = 1e-300;
+  tc.elbo_floor = 0;
+  m = base;
+  rep = trainSvgp(m, X, y, tc);
+  EXPECT_FALSE(rep.converged);
+  EXPECT_EQ(rep.iterations, tc.max_iterations);
+}
+
+// Polyak–Ruppert tail averaging (TrainConfig::average_iterates): the returned q(u) has the mean natural
+// parameters and the model the mean hyperparameters of the iterates of the last completed epoch and the partial
+// one after it.
+TEST(CopaSvgp, IterateAveragingReturnsTheMeanOfTheLastEpochsIterates) {
+  std::mt19937_64 rng(6);
+  SvgpModel model = heteroModel(rng, 8);
+  const Eigen::MatrixXd X = randomInputs(200, rng);
+  Eigen::VectorXd y(200);
+  for (int i = 0; i < 200; ++i) y[i] = std::cos(X(i, 0)) - 0.2 * X(i, 1);
+  TrainConfig tc;
+  tc.batch_size = 50;  // 4 steps per epoch; epochs end after steps 3, 7, 11, 15
+  tc.max_iterations = 18;
+  tc.decay_steps = 2;
+  tc.tolerance = 0;
+  tc.hyper_every = 1;
+  tc.natgrad_gamma_start = tc.natgrad_gamma_end = 0.3;
+  tc.average_iterates = true;
+  std::vector<Eigen::MatrixXd> lambda;
+  std::vector<Eigen::VectorXd> theta, hyper;
+  tc.progress = [&](int it, double, double) {
+    if (it < 12) return;  // the window: steps 12..15 (last full epoch) and 16, 17
+    const LatentGp& f = model.latents()[0];
+    const Eigen::MatrixXd P = f.L.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(8, 8));
+    lambda.push_back(P.transpose() * P);
+    theta.push_back(lambda.back() * f.mu);
+    hyper.push_back(model.hyperParams());
+  };
+  const TrainReport rep = trainSvgp(model, X, y, tc);
+  ASSERT_FALSE(rep.diverged) << rep.message;
+  ASSERT_EQ(rep.averaged_iterates, 6);
+  ASSERT_EQ(lambda.size(), 6u);
+  Eigen::MatrixXd lam = Eigen::MatrixXd::Zero(8, 8);
+  Eigen::VectorXd th = Eigen::VectorXd::Zero(8), hy = Eigen::VectorXd::Zero(hyper[0].size());
+  for (std::size_t i = 0; i < 6; ++i) {
+    lam += lambda[i] / 6.0;
+    th += theta[i] / 6.0;
+    hy += hyper[i] / 6.0;
+  }
+  const LatentGp& f = model.latents()[0];
+  const Eigen::MatrixXd S = f.L * f.L.transpose();
+  EXPECT_LE((S * lam - Eigen::MatrixXd::Identity(8, 8)).norm(), 1e-7);
+  EXPECT_LE((f.mu - lam.ldlt().solve(th)).norm(), 1e-7 * (1.0 + f.mu.norm()));
+  EXPECT_LE((model.hyperParams() - hy).norm(), 1e-12 * (1.0 + hy.norm()));
+  // The average differs from the last iterate (the run has not converged).
+  EXPECT_GT((model.hyperParams() - hyper.back()).norm(), 1e-6);
+}

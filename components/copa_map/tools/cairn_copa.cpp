@@ -88,6 +88,16 @@ void applyConfig(const std::string& path, CopaMapConfig& mc, TrainConfig& tc) {
     std::string key = line.substr(0, eq), val = line.substr(eq + 1);
     key.erase(0, key.find_first_not_of(" \t"));
     key.erase(key.find_last_not_of(" \t\r") + 1);
+    if (key == "step_decay") {  // the only key with a word value
+      val.erase(0, val.find_first_not_of(" \t"));
+      val.erase(val.find_last_not_of(" \t\r") + 1);
+      try {
+        tc.step_decay = stepDecayFromName(val);
+      } catch (const std::invalid_argument& e) {
+        throw InputError(path, ln, e.what());
+      }
+      continue;
+    }
     char* end = nullptr;
     const double v = std::strtod(val.c_str(), &end);
     if (end == val.c_str() || !std::isfinite(v)) throw InputError(path, ln, "value of '" + key + "' is not a number");
@@ -106,6 +116,11 @@ void applyConfig(const std::string& path, CopaMapConfig& mc, TrainConfig& tc) {
     else if (key == "train_inducing") tc.train_inducing = v != 0;
     else if (key == "inducing_lr") tc.inducing_lr = v;
     else if (key == "tolerance") tc.tolerance = v;
+    else if (key == "elbo_floor") tc.elbo_floor = v;
+    else if (key == "patience") tc.patience = static_cast<int>(v);
+    else if (key == "decay_tau") tc.decay_tau = v;
+    else if (key == "plateau_factor") tc.plateau_factor = v;
+    else if (key == "average_iterates") tc.average_iterates = v != 0;
     else if (key == "seed") tc.seed = mc.seed = mc.period_init.seed = static_cast<std::uint64_t>(v);
     else if (key == "alpha_ind") mc.alpha_ind = v;
     else if (key == "g_inducing_ratio") mc.g_inducing_ratio = v;

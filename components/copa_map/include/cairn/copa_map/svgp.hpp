@@ -110,6 +110,10 @@ struct LatentGp {
   LatentGp& operator=(LatentGp&&) = default;
 };
 
+// Sets q(u) of `lat` from its natural parameters Λ = S⁻¹ (symmetrized) and θ1 = S⁻¹μ; false (and `lat`
+// unchanged) when Λ is not positive definite.
+bool setNaturalParams(LatentGp& lat, Eigen::MatrixXd Lambda, const Eigen::VectorXd& theta1);
+
 // Result of one ELBO evaluation on a mini-batch, with everything the optimizers need.
 struct ElboEvaluation {
   double elbo = 0;  // scale * Σ_batch E[log p] - Σ KL (eq. 4.12)
@@ -187,6 +191,20 @@ struct TrainConfig {
   double adam_lr_start = 1e-2;       // Adam on kernel hyperparameters (copa-map: 1e-2 -> 1e-3)
   double adam_lr_end = 1e-3;
   int decay_steps = 100;             // linear decay over the first 100 steps (§4.2.5)
+  // What γ and Adam's rate do after the linear warm-up/decay of the first `decay_steps` steps. Stüde §4.2.5
+  // gives only the linear decay; with constant steps the stochastic natural-gradient iterates keep jittering
+  // around the optimum (Salimbeni et al. 2018 §4 decay γ; Robbins–Monro needs Σγ = ∞, Σγ² < ∞), and the
+  // epoch ELBO never settles. Constant: γ_end / lr_end from then on. InvSqrt: both multiplied by
+  // (1 + (k − decay_steps)/decay_tau)^(-1/2). Plateau: both multiplied by plateau_factor after every epoch whose
+  // mean ELBO is below the best epoch mean so far (step decay on a stalled epoch ELBO).
+  enum class StepDecay { Constant, InvSqrt, Plateau };
+  StepDecay step_decay = StepDecay::Constant;
+  double decay_tau = 0;              // InvSqrt time constant in steps; 0 = one epoch (⌈n / batch_size⌉ steps)
+  double plateau_factor = 0.5;
+  // Polyak–Ruppert (tail) averaging: the returned model is the mean of the iterates after `decay_steps` over the
+  // last completed epoch and the current partial one (natural parameters of q(u), unconstrained hyperparameters,
+  // Z). The ELBOs in the report are those of the iterates.
+  bool average_iterates = false;
   bool train_hyper = true;
   // Adam on the inducing inputs Z of every latent (the "and optionally Z"), on the same steps as the
   // hyperparameters; step size in input units (m, time units). Off by default (see the README for ATC).
@@ -194,18 +212,34 @@ struct TrainConfig {
   double inducing_lr = 0.02;
   int hyper_warmup = 0;              // natural-gradient-only steps before Adam starts
   int hyper_every = 1;               // Adam step on every k-th mini-batch (others: natural gradient only)
-  double tolerance = 1e-3;           // stop when the epoch-mean ELBO changes relatively less (copa-map: 1e-3)
+  // Convergence (early stopping): the mean mini-batch ELBO of an epoch (every point seen once) changes by at most
+  // tolerance · max(|previous epoch mean ELBO per point|, elbo_floor) per point, in `patience` consecutive
+  // epochs. copa-map uses the relative change 1e-3 (elbo_floor = 0). The ELBO per point of standardized outputs
+  // is near 0 (it shifts by log of the output scale), where a purely relative test is ill-conditioned; a floor of
+  // 1 nat per point makes it an absolute 1e-3 nats per point there.
+  double tolerance = 1e-3;
+  double elbo_floor = 0.0;
+  int patience = 1;
   int min_epochs = 2;
   std::uint64_t seed = 1;
   // Called after every step with (iteration, mini-batch ELBO per point, elapsed seconds).
   std::function<void(int, double, double)> progress;
+  // Called after every completed epoch with (epoch count, epoch-mean ELBO per point), the model in its current
+  // state (e.g. to score it on held-out data).
+  std::function<void(int, double)> on_epoch;
 };
+
+// "constant", "invsqrt", "plateau" <-> TrainConfig::StepDecay; an unknown name throws std::invalid_argument.
+TrainConfig::StepDecay stepDecayFromName(const std::string& name);
+const char* stepDecayName(TrainConfig::StepDecay d);
 
 struct TrainReport {
   int iterations = 0;
   int epochs = 0;
   double seconds = 0;
   double final_elbo = 0;  // mean mini-batch ELBO of the last epoch, per data point
+  int averaged_iterates = 0;  // iterates in the returned average (0: the last iterate is returned)
+  double final_gamma = 0;  // natural-gradient step γ of the last iteration (after warm-up and decay)
   bool converged = false;
   bool diverged = false;
   std::string message;
