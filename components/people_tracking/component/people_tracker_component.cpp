@@ -167,7 +167,7 @@ class PeopleTracker : public cairn::Node {
     mask_.margin = declare_parameter<double>("mask.margin", mask_.margin, D{"m, safety margin of r_P", 0.0, 2.0, true});
     mask_.default_radius = declare_parameter<double>("mask.default_radius", mask_.default_radius, D{"m, r_P when the leg separation is unknown", 0.05, 3.0, true});
     mask_.min_radius = declare_parameter<double>("mask.min_radius", mask_.min_radius, D{"m, smallest r_P", 0.0, 3.0, true});
-    const std::string mask_kind = declare_parameter<std::string>("mask.mode", "tangents", D{"tangents: every beam between the tangents (Yuan §3.2.1) | inside: only returns inside the circle", {}, {}, true});
+    const std::string mask_kind = declare_parameter<std::string>("mask.mode", "inside", D{"inside: only returns inside the circle | tangents: every beam between the tangents (Yuan §3.2.1)", {}, {}, true});
     try {
       mask_kind_ = pt::parseMaskMode(mask_kind, "parameter 'mask.mode'");
     } catch (const pt::InputError& e) {
@@ -490,7 +490,7 @@ class PeopleTracker : public cairn::Node {
   std::unique_ptr<cairn::TransformListener> tf_listener_;
   std::string mask_mode_;
   pt::MaskParams mask_;
-  pt::MaskMode mask_kind_ = pt::MaskMode::kTangents;
+  pt::MaskMode mask_kind_ = pt::MaskMode::kReturnsInside;
   std::unique_ptr<pt::PersonDetector> detector_;
   std::unique_ptr<pt::PeopleTracker> tracker_;
   std::unique_ptr<pt::GuideTracker> guide_;

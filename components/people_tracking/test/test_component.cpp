@@ -163,6 +163,7 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
   cairn::LoadRequest req{"cairn_people_tracking::PeopleTracker", "people_tracker"};
   req.parameters["guide.select_max_distance"] = 5.0;
   req.parameters["mask.people"] = std::string("guide");
+  req.parameters["mask.mode"] = std::string("tangents");  // Yuan's rule: the beam towards the centre is masked too
   const auto loaded = mgr.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
   Spinner spinner(exec);
@@ -497,7 +498,7 @@ TEST(PeopleTrackerComponent, LaunchSpecValidatesItsParameters) {
   EXPECT_NE(e.find("parameter 'use_odom' expects bool"), std::string::npos) << e;
   e = launchError("{tracker.association: kalman}");
   EXPECT_NE(e.find("'tracker.association' must be gnn or jpda, got 'kalman'"), std::string::npos) << e;
-  EXPECT_EQ(launchError("{mask.mode: inside}"), "");
+  EXPECT_EQ(launchError("{mask.mode: tangents}"), "");
   e = launchError("{mask.mode: everything}");
   EXPECT_NE(e.find("'mask.mode' must be tangents or inside, got 'everything'"), std::string::npos) << e;
   e = launchError("{model_file: no_such_model.yml}");
