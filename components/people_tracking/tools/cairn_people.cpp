@@ -39,7 +39,7 @@ struct Args {
 };
 
 [[noreturn]] void fail(const std::string& what) {
-  std::fprintf(stderr, "cairn: %s:%d: %s\n", __FILE__, __LINE__, what.c_str());
+  std::fprintf(stderr, "cairn people: %s\n", what.c_str());  // the place (file:line, option) is in `what`
   std::exit(2);
 }
 

@@ -1,0 +1,23 @@
+# `cairn-people` bad input: one line on stderr naming the place (file:line or option), exit 2, no crash.
+# Invoked by ctest with -DCAIRN_PEOPLE=<exe> (tmp files go to the current directory).
+function(expect_error needle)
+  execute_process(COMMAND ${CAIRN_PEOPLE} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 2)
+    message(FATAL_ERROR "cairn-people ${ARGN}: exit ${rc}, expected 2\n${out}\n${err}")
+  endif()
+  string(FIND "${err}" "${needle}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "cairn-people ${ARGN}: stderr lacks '${needle}':\n${err}")
+  endif()
+  string(REGEX MATCHALL "\n" lines "${err}")
+  list(LENGTH lines n)
+  if(NOT n EQUAL 1)
+    message(FATAL_ERROR "cairn-people ${ARGN}: expected one line on stderr, got ${n}:\n${err}")
+  endif()
+endfunction()
+
+file(WRITE bad_tracks.csv "t,id,x,y\n0,1,0.5,2\n0.1,1,abc,2\n")
+expect_error("cairn people: bad_tracks.csv:3:" bench --world auto --trajectories bad_tracks.csv --json)
+expect_error("no_such_file.txt" bench --world auto --trajectories no_such_file.txt)
+expect_error("model file not found: /no/such/model.yml" eval --model /no/such/model.yml)
+expect_error("unknown verb 'fly'" fly)
