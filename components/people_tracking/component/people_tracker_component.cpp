@@ -106,6 +106,7 @@ class PeopleTracker : public cairn::Node {
     sp.max_points = static_cast<std::size_t>(declare_parameter<int64_t>("segmentation.max_points", static_cast<int64_t>(sp.max_points), D{"largest cluster", 1.0, 100000.0, true}));
     sp.jump_cap = declare_parameter<double>("segmentation.jump_cap", sp.jump_cap, D{"m, neighbour jump when there is no neighbour", 0.0, 100.0, true});
     dp.min_leg_confidence = declare_parameter<double>("detector.min_leg_confidence", dp.min_leg_confidence, D{"classifier score to accept a leg", 0.0, 1.0, true});
+    dp.track_leg_confidence = declare_parameter<double>("detector.track_leg_confidence", dp.track_leg_confidence, D{"weaker legs that may only update existing tracks", 0.0, 1.0, true});
     dp.max_range = declare_parameter<double>("detector.max_range", dp.max_range, D{"m, clusters beyond are ignored", 0.1, 100.0, true});
     dp.max_leg_width = declare_parameter<double>("detector.max_leg_width", dp.max_leg_width, D{"m, wider clusters are not legs", 0.01, 2.0, true});
     dp.leg_center_offset = declare_parameter<double>("detector.leg_center_offset", dp.leg_center_offset, D{"m, leg centre behind the visible surface", 0.0, 0.5, true});
@@ -148,6 +149,7 @@ class PeopleTracker : public cairn::Node {
     tp.occluded_delete_timeout = declare_parameter<double>("tracker.occluded_delete_timeout", tp.occluded_delete_timeout, D{"s without update deletes a track occluded since its last update", 0.0, 60.0, true});
     tp.free_space_delete_scans = static_cast<int>(declare_parameter<int64_t>("tracker.free_space_delete_scans", tp.free_space_delete_scans, D{"consecutive scans with beams through a track delete it", 1.0, 1000.0, true}));
     tp.split_scans = static_cast<int>(declare_parameter<int64_t>("tracker.split_scans", tp.split_scans, D{"scans with four legs in a track's gate before it splits (0 = never)", 0.0, 1000.0, true}));
+    tp.single_leg_stride_sigma = declare_parameter<double>("tracker.single_leg_stride_sigma", tp.single_leg_stride_sigma, D{"m, single-leg update std along the walking direction (0 = off)", 0.0, 2.0, true});
 
     // Guide (guide.hpp; Yuan §2.2.1).
     pt::GuideParams gp;

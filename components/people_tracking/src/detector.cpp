@@ -26,7 +26,7 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan) cons
     const double width = (c.points.front() - c.points.back()).norm();
     if (width > params_.max_leg_width) continue;
     const double conf = classifier_->score(computeFeatures(c));
-    if (conf < params_.min_leg_confidence) continue;
+    if (conf < std::min(params_.min_leg_confidence, params_.track_leg_confidence)) continue;
     const Eigen::Vector2d center = range > 1e-6 ? Eigen::Vector2d(centroid * (1.0 + params_.leg_center_offset / range))
                                                  : centroid;
     legs.push_back({center, conf, width});
@@ -60,13 +60,15 @@ PersonDetection personFromLeg(const LegDetection& leg, const DetectorParams& par
 
 std::vector<PersonDetection> pairLegs(const std::vector<LegDetection>& legs, const DetectorParams& params) {
   std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
+  std::vector<bool> used(legs.size(), false);
+  for (std::size_t i = 0; i < legs.size(); ++i) used[i] = legs[i].confidence < params.min_leg_confidence;
   for (std::size_t i = 0; i < legs.size(); ++i)
     for (std::size_t j = i + 1; j < legs.size(); ++j) {
+      if (used[i] || used[j]) continue;
       const double d = (legs[i].position - legs[j].position).norm();
       if (d <= params.max_leg_pair_distance) pairs.emplace_back(d, i, j);
     }
   std::sort(pairs.begin(), pairs.end());
-  std::vector<bool> used(legs.size(), false);
   std::vector<PersonDetection> out;
   for (const auto& pair : pairs) {
     const std::size_t i = std::get<1>(pair), j = std::get<2>(pair);

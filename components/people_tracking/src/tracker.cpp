@@ -283,13 +283,25 @@ std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<Leg
   for (std::size_t i = 0; i < tracks_.size(); ++i) {
     const auto& mine = track_legs[i];
     if (mine.empty()) continue;
-    out.push_back(mine.size() == 2 ? personFromLegs(legs[mine[0]], legs[mine[1]], pairing)
-                                   : personFromLeg(legs[mine[0]], pairing));
+    if (mine.size() == 2) {
+      out.push_back(personFromLegs(legs[mine[0]], legs[mine[1]], pairing));
+    } else {
+      out.push_back(personFromLeg(legs[mine[0]], pairing));
+      // One leg of a walking person is the stance foot (standing still) or the swinging one (twice the body's
+      // speed): along the walking direction it says little about the body centre, so a track seeing only one
+      // leg for a few scans neither stops on the stance foot nor jumps ahead with the swing.
+      const Track& t = tracks_[i];
+      const double speed = t.velocity().norm();
+      if (params_.single_leg_stride_sigma > 0.0 && speed > params_.leg_spread_min_speed) {
+        const Eigen::Vector2d u = t.velocity() / speed;
+        out.back().covariance += params_.single_leg_stride_sigma * params_.single_leg_stride_sigma * u * u.transpose();
+      }
+    }
     det_track.push_back(static_cast<int>(i));
   }
   std::vector<LegDetection> rest;
   for (std::size_t j = 0; j < nl; ++j)
-    if (!leg_used[j] && !gated_by_confirmed[j]) rest.push_back(legs[j]);
+    if (!leg_used[j] && !gated_by_confirmed[j]) rest.push_back(legs[j]);  // pairLegs skips weak legs
   for (const PersonDetection& d : pairLegs(rest, pairing)) {
     out.push_back(d);
     det_track.push_back(-1);

@@ -79,6 +79,30 @@ TEST(PersonDetector, FindsPeopleAmongFurniture) {
   EXPECT_LE(false_pos, 10);  // furniture/clutter rarely looks like a person
 }
 
+TEST(PersonDetector, TrackLegConfidenceAddsWeakLegsButNotPersons) {
+  // detectLegs returns clusters down to track_leg_confidence (for track updates); persons are unchanged.
+  const std::vector<WalkerState> people{walker(2.0, 1.0, 0.3, 0.0), walker(6.0, 1.5, -1.0, 2.0),
+                                        walker(7.0, -2.0, 1.0, 1.6)};
+  const Scene scene = officeScene(people);
+  DetectorParams strict;
+  strict.track_leg_confidence = strict.min_leg_confidence;
+  const PersonDetector loose_det(shippedModel()), strict_det(shippedModel(), strict);
+  std::mt19937_64 rng(5);
+  std::size_t extra = 0;
+  for (int k = 0; k < 10; ++k) {
+    const SimScan sim = renderScan(scene, Pose2{}, LaserModel{}, 0.1 * k, rng);
+    const auto loose = loose_det.detectLegs(sim.scan), tight = strict_det.detectLegs(sim.scan);
+    ASSERT_GE(loose.size(), tight.size());
+    extra += loose.size() - tight.size();
+    for (const auto& l : loose)
+      EXPECT_GE(l.confidence, loose_det.params().track_leg_confidence);
+    const auto a = loose_det.detect(sim.scan), b = strict_det.detect(sim.scan);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(a[i].position.isApprox(b[i].position));
+  }
+  EXPECT_GT(extra, 0u);  // the scene has clusters scored between the two thresholds
+}
+
 TEST(PersonDetector, RejectsMalformedScan) {
   const PersonDetector det(shippedModel());
   LaserScan bad;

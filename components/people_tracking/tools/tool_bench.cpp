@@ -54,6 +54,10 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--split-scans") p.tracker.split_scans = static_cast<int>(number(value()));
     else if (a == "--visibility-radius") p.tracker.visibility_radius = number(value());
     else if (a == "--min-init-distance") p.tracker.min_init_distance = number(value());
+    else if (a == "--single-leg-stride") p.tracker.single_leg_stride_sigma = number(value());
+    else if (a == "--initial-velocity-sigma") p.tracker.initial_velocity_sigma = number(value());
+    else if (a == "--track-leg-confidence") p.detector.track_leg_confidence = number(value());
+    else if (a == "--min-leg-confidence") p.detector.min_leg_confidence = number(value());
     else if (a == "--pair-distance") p.detector.max_leg_pair_distance = number(value());
     else throw InputError("unknown bench option '" + a + "'");
   }
