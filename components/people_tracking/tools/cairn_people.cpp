@@ -88,7 +88,8 @@ void usage() {
       "            [--max-walkers N] [--scene-generator N] -o FILE\n"
       "  bench --world auto --trajectories FILE [--robot-path FILE] [--seed N] [--duration S] [--max-people N]\n"
       "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S]\n"
-      "        [--reid-window S] [--publish-coast S] [--split-scans K] [--dump DIR] [--json]\n"
+      "        [--reid-window S] [--publish-coast S] [--split-scans K] [--confirm-hits N] [--single-leg-stride M]\n"
+      "        [--min-leg-confidence C] [--track-leg-confidence C] [--dump DIR] [--json]\n"
       "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--robot follow|route]\n"
       "             [--keep-spurs] [--follow-distance M] [--fov-deg 360] [--mask tangents|inside] [--model FILE]\n"
       "             [--heading-drift R] [--scale-error E] [--max-duration S] [--json]");
