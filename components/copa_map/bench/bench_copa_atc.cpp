@@ -4,7 +4,7 @@
 //   bench_copa_atc [--data DIR] [--reduced] [--batches N] [--max-seconds S] [--max-iterations N]
 //                  [--kmeans-inducing] [--no-gphom] [--seed N] [--batch B] [--hyper-every K] [--gamma G]
 //                  [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z] [--decay constant|invsqrt|plateau]
-//                  [--decay-tau STEPS] [--patience E] [--elbo-floor F] [--adam-lr-end LR] [--average]
+//                  [--decay-tau STEPS] [--patience E] [--elbo-floor F] [--adam-lr LR] [--adam-lr-end LR] [--average]
 //                  [--z-stride K] [--epoch-nrmse]
 // Defaults: atcTrainConfig() (copa_map.hpp). --reduced: every 4th (--z-stride) of the authors' inducing points and
 // exactly --batches mini-batches (default 1000, no time limit: reducedTrainConfig), the configuration of the CI
@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
          tolerance = def.tolerance;
   bool train_z = false, epoch_nrmse = false, average = false;
   std::string decay_name;
-  double decay_tau = -1, elbo_floor = -1, adam_lr_end = -1;
+  double decay_tau = -1, elbo_floor = -1, adam_lr_end = -1, adam_lr = -1;
   int patience = -1, z_stride = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -79,12 +79,13 @@ int main(int argc, char** argv) {
     else if (a == "--patience" && i + 1 < argc) patience = std::atoi(argv[++i]);
     else if (a == "--elbo-floor" && i + 1 < argc) elbo_floor = std::atof(argv[++i]);
     else if (a == "--adam-lr-end" && i + 1 < argc) adam_lr_end = std::atof(argv[++i]);
+    else if (a == "--adam-lr" && i + 1 < argc) adam_lr = std::atof(argv[++i]);
     else if (a == "--epoch-nrmse") epoch_nrmse = true;
     else if (a == "--average") average = true;
     else if (a == "--z-stride" && i + 1 < argc) z_stride = std::atoi(argv[++i]);
     else {
       std::fprintf(stderr, "usage: %s [--data DIR] [--reduced] [--batches N] [--max-seconds S] [--max-iterations N] "
-                           "[--kmeans-inducing] [--no-gphom] [--no-copa] [--seed N] [--batch B] [--hyper-every K] [--gamma G] [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z] [--decay constant|invsqrt|plateau] [--decay-tau STEPS] [--patience E] [--elbo-floor F] [--adam-lr-end LR] [--epoch-nrmse] [--average] [--z-stride K]\n", argv[0]);
+                           "[--kmeans-inducing] [--no-gphom] [--no-copa] [--seed N] [--batch B] [--hyper-every K] [--gamma G] [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z] [--decay constant|invsqrt|plateau] [--decay-tau STEPS] [--patience E] [--elbo-floor F] [--adam-lr LR] [--adam-lr-end LR] [--epoch-nrmse] [--average] [--z-stride K]\n", argv[0]);
       return 2;
     }
   }
@@ -109,6 +110,7 @@ int main(int argc, char** argv) {
     if (decay_tau >= 0) tc.decay_tau = decay_tau;
     if (patience >= 1) tc.patience = patience;
     if (elbo_floor >= 0) tc.elbo_floor = elbo_floor;
+    if (adam_lr > 0) tc.adam_lr_start = adam_lr;
     if (adam_lr_end > 0) tc.adam_lr_end = adam_lr_end;
     if (average) tc.average_iterates = true;
     // CI configuration: every 4th authors' inducing point unless --z-stride says otherwise.
@@ -153,7 +155,10 @@ int main(int argc, char** argv) {
     };
     if (epoch_nrmse)  // diagnostics: test NRMSE of the model after every epoch (costs one prediction each)
       tc.on_epoch = [&cm, &test](int e, double elbo) {
-        std::fprintf(stderr, "  epoch %d elbo/n %.5f test NRMSE %.4f\n", e, elbo, nrmse(cm.predict(test.X).mean, test.y));
+        std::fprintf(stderr, "  epoch %d elbo/n %.5f test NRMSE %.4f  hyper", e, elbo, nrmse(cm.predict(test.X).mean, test.y));
+        const Eigen::VectorXd h = cm.model().hyperParams();
+        for (Eigen::Index i = 0; i < h.size(); ++i) std::fprintf(stderr, " %.3f", h[i]);
+        std::fprintf(stderr, "\n");
       };
     const double c0 = cpuNow();
     const TrainReport rep = cm.train(train.X, train.y, tc);

@@ -2,9 +2,10 @@
 // in <= 2 minutes and loses <= 5 % NRMSE, used by CI"): the authors' training split seen by the simulated moving
 // robot (76,456 cells), every 4th of their inducing points, a fixed number of mini-batches (reducedTrainConfig:
 // deterministic, no time limit; as many batches as the full run got), scored on the full ground-truth test split
-// (eq. 4.20). The bound comes from the full configuration measured in docs/benchmarks.md (copa_map): there the
-// reduced configuration lost 10.6 % NRMSE, so the issue's 5 % is NOT met; the test guards the measured relation
-// with a margin for other CPUs' rounding (GEMM variant) and fails if training or the model breaks.
+// (eq. 4.20). The bound is the issue's: at most 5 % above the NRMSE of the full configuration (m_f = 1,915,
+// atcTrainConfig, 10 minutes on 2 cores) measured in docs/benchmarks.md (copa_map). Measured: reduced 0.8055 =
+// 1.032 x full 0.7803 with the AVX-512 GEMM; the AVX2 and portable GEMM variants (other CPUs) are recorded
+// there too. The test fails if training or the model breaks or the schedule loses its settling.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -21,11 +22,10 @@ using namespace cairn::copa_map;
 
 namespace {
 
-// NRMSE of the full configuration (m_f = 1,915, 1,006 batches = 25 epochs in 3,000 s), docs/benchmarks.md.
+// NRMSE of the full configuration (m_f = 1,915, 593 batches = 15 epochs in 600 s), docs/benchmarks.md.
 constexpr double kFullNrmse = CAIRN_COPA_ATC_FULL_NRMSE;
 constexpr int kReducedBatches = CAIRN_COPA_ATC_REDUCED_BATCHES;
-// Measured: reduced 1.1405 = 1.106 x full. Allowed: 1.15 x full (the issue's target would be 1.05).
-constexpr double kAllowedRatio = 1.15;
+constexpr double kAllowedRatio = 1.05;  // issue 7: "loses <= 5 % NRMSE"
 
 std::string atcDir() {
   if (const char* env = std::getenv("CAIRN_COPA_ATC_DATA")) return env;

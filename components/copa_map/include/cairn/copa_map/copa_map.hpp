@@ -34,8 +34,9 @@ struct CopaMapConfig {
 };
 
 // Training schedule of the ATC benchmark (docs/benchmarks.md, copa_map): mini-batch 2000, natural-gradient γ
-// 0.3 -> 0.1 over the first 100 steps, Adam (1e-2 -> 1e-3) on every 5th batch, seed 1; stops when the epoch-mean
-// ELBO changes relatively less than 1e-3 (TrainConfig::tolerance) or at 600 s.
+// 0.3 -> 0.1 over the first 100 steps, Adam 1e-2 on every 2nd batch, then γ and Adam's rate halved after every
+// epoch whose ELBO is below the best so far (StepDecay::Plateau), seed 1; stops when the epoch ELBO per point
+// changes by at most 1e-3 · max(|ELBO per point|, 1) in 2 consecutive epochs, or at 600 s.
 TrainConfig atcTrainConfig();
 
 // The reduced configuration used by CI (issue 7): every `stride`-th row of the inducing inputs and exactly
