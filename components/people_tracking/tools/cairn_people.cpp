@@ -86,7 +86,7 @@ void usage() {
       "  eval  --model FILE [--scenes 500] [--seed 1000003] [--data CSV] [--json]\n"
       "  gen-train [--worlds apartment,office,warehouse,open] [--episodes 200] [--seed 1] [--scans-per-episode 6] [--walker-area 5]\n"
       "            [--max-walkers N] [--scene-generator N] -o FILE\n"
-      "  bench --world auto --trajectories FILE [--robot-path FILE] [--seed N] [--duration S] [--max-people N]\n"
+      "  bench --world auto --trajectories FILE [--robot-path FILE] [--seed N] [--duration S]\n"
       "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S]\n"
       "        [--reid-window S] [--publish-coast S] [--split-scans K] [--confirm-hits N] [--single-leg-stride M]\n"
       "        [--min-leg-confidence C] [--track-leg-confidence C] [--dump DIR] [--json]\n"
