@@ -18,7 +18,7 @@ TrainConfig atcTrainConfig() {
   tc.adam_lr_end = 1e-2;
   tc.decay_steps = 100;  // linear decay of γ over the first 100 steps (§4.2.5)
   // Then γ and the Adam rate halve after every epoch whose ELBO is below the best epoch so far (step decay on a
-  // stalled ELBO; Salimbeni et al. 2018 decay γ), so the stochastic iterates settle.
+  // stalled ELBO; stochastic VI needs decaying steps, Hoffman et al. 2013), so the stochastic iterates settle.
   tc.step_decay = TrainConfig::StepDecay::Plateau;
   tc.plateau_factor = 0.5;
   tc.hyper_every = 2;    // Adam on every 2nd batch (every 5th: hyperparameters far from converged after 25 epochs)

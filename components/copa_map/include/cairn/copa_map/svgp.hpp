@@ -193,8 +193,8 @@ struct TrainConfig {
   int decay_steps = 100;             // linear decay over the first 100 steps (§4.2.5)
   // What γ and Adam's rate do after the linear warm-up/decay of the first `decay_steps` steps. Stüde §4.2.5
   // gives only the linear decay; with constant steps the stochastic natural-gradient iterates keep jittering
-  // around the optimum (Salimbeni et al. 2018 §4 decay γ; Robbins–Monro needs Σγ = ∞, Σγ² < ∞), and the
-  // epoch ELBO never settles. Constant: γ_end / lr_end from then on. InvSqrt: both multiplied by
+  // around the optimum and the epoch ELBO never settles (stochastic VI needs decaying steps: Hoffman et al.
+  // 2013, ρ_t = (t + τ)^(-κ); Robbins–Monro Σγ = ∞, Σγ² < ∞. InvSqrt is κ = ½, the slowest such decay). Constant: γ_end / lr_end from then on. InvSqrt: both multiplied by
   // (1 + (k − decay_steps)/decay_tau)^(-1/2). Plateau: both multiplied by plateau_factor after every epoch whose
   // mean ELBO is below the best epoch mean so far (step decay on a stalled epoch ELBO).
   enum class StepDecay { Constant, InvSqrt, Plateau };
