@@ -91,8 +91,8 @@ TrajectoryError trajectoryError(const std::vector<gs::StampedPose>& traj, const 
 // `tolerance` from every wall, door and piece of furniture is spurious; spurious cells within `guide_radius` of
 // the guide's true path are leg imprints.
 MaskBenchMap mapError(const gs::OccupancyGrid& map, const TrajectoryError& align, const sim::Simulator& s,
-                  const std::vector<Eigen::Vector2d>& guide_path, double occupied_thresh = 0.65,
-                  double tolerance = 0.15, double guide_radius = 0.5) {
+                      const std::vector<Eigen::Vector2d>& guide_path, double occupied_thresh = 0.65,
+                      double tolerance = 0.15, double guide_radius = 0.5) {
   MaskBenchMap e;
   for (int y = 0; y < map.height; ++y)
     for (int x = 0; x < map.width; ++x) {
