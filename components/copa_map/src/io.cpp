@@ -8,7 +8,6 @@
 #include <sstream>
 
 namespace cairn::copa_map {
-namespace {
 
 std::string trim(const std::string& s) {
   const auto a = s.find_first_not_of(" \t\r\n");
@@ -16,6 +15,8 @@ std::string trim(const std::string& s) {
   const auto b = s.find_last_not_of(" \t\r\n");
   return s.substr(a, b - a + 1);
 }
+
+namespace {
 
 std::vector<std::string> split(const std::string& line) {
   std::vector<std::string> out;

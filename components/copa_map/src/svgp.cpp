@@ -684,23 +684,21 @@ struct IterateSum {
   void add(const SvgpModel& model) {
     const auto& lats = model.latents();
     if (count == 0) {
-      Lambda.assign(lats.size(), Eigen::MatrixXd());
-      Z.assign(lats.size(), Eigen::MatrixXd());
-      theta1.assign(lats.size(), Eigen::VectorXd());
+      Lambda.clear();
+      theta1.clear();
+      Z.clear();
+      for (const auto& lat : lats) {
+        Lambda.push_back(Eigen::MatrixXd::Zero(lat.Z.rows(), lat.Z.rows()));
+        theta1.push_back(Eigen::VectorXd::Zero(lat.Z.rows()));
+        Z.push_back(Eigen::MatrixXd::Zero(lat.Z.rows(), lat.Z.cols()));
+      }
       hyper = Eigen::VectorXd::Zero(model.numHyperParams());
     }
     for (std::size_t k = 0; k < lats.size(); ++k) {
       const Eigen::MatrixXd P = precisionOf(lats[k]);
-      const Eigen::VectorXd t = P * lats[k].mu;
-      if (count == 0) {
-        Lambda[k] = P;
-        theta1[k] = t;
-        Z[k] = lats[k].Z;
-      } else {
-        Lambda[k] += P;
-        theta1[k] += t;
-        Z[k] += lats[k].Z;
-      }
+      Lambda[k] += P;
+      theta1[k] += P * lats[k].mu;
+      Z[k] += lats[k].Z;
     }
     hyper += model.hyperParams();
     ++count;

@@ -85,12 +85,8 @@ void applyConfig(const std::string& path, CopaMapConfig& mc, TrainConfig& tc) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     const auto eq = line.find('=');
     if (eq == std::string::npos) throw InputError(path, ln, "expected 'key = value'");
-    std::string key = line.substr(0, eq), val = line.substr(eq + 1);
-    key.erase(0, key.find_first_not_of(" \t"));
-    key.erase(key.find_last_not_of(" \t\r") + 1);
+    const std::string key = trim(line.substr(0, eq)), val = trim(line.substr(eq + 1));
     if (key == "step_decay") {  // the only key with a word value
-      val.erase(0, val.find_first_not_of(" \t"));
-      val.erase(val.find_last_not_of(" \t\r") + 1);
       try {
         tc.step_decay = stepDecayFromName(val);
       } catch (const std::invalid_argument& e) {

@@ -30,6 +30,9 @@ struct CsvTable {
   int column(const std::string& name) const;  // -1 when missing
 };
 
+// Strips spaces, tabs, CR and LF at both ends (the CSV and config-file readers).
+std::string trim(const std::string& s);
+
 // Reads a numeric CSV with a header line. Every row must have the header's column count and finite numbers.
 CsvTable readCsv(const std::string& path);
 

@@ -212,7 +212,8 @@ struct TrainConfig {
   double inducing_lr = 0.02;
   int hyper_warmup = 0;              // natural-gradient-only steps before Adam starts
   int hyper_every = 1;               // Adam step on every k-th mini-batch (others: natural gradient only)
-  // Convergence (early stopping): the mean mini-batch ELBO of an epoch (every point seen once) changes by at most
+  // Convergence (early stopping): the epoch ELBO (one pass over a shuffled partition of the data: every point seen
+  // once, Σ E[log p] minus the mean KL, per point) changes by at most
   // tolerance · max(|previous epoch mean ELBO per point|, elbo_floor) per point, in `patience` consecutive
   // epochs. copa-map uses the relative change 1e-3 (elbo_floor = 0). The ELBO per point of standardized outputs
   // is near 0 (it shifts by log of the output scale), where a purely relative test is ill-conditioned; a floor of
@@ -237,7 +238,7 @@ struct TrainReport {
   int iterations = 0;
   int epochs = 0;
   double seconds = 0;
-  double final_elbo = 0;  // mean mini-batch ELBO of the last epoch, per data point
+  double final_elbo = 0;  // ELBO of the last epoch per data point (mean mini-batch ELBO if no epoch completed)
   int averaged_iterates = 0;  // iterates in the returned average (0: the last iterate is returned)
   double final_gamma = 0;  // natural-gradient step γ of the last iteration (after warm-up and decay)
   bool converged = false;
