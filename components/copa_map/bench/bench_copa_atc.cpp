@@ -5,7 +5,7 @@
 //                  [--kmeans-inducing] [--no-gphom] [--seed N] [--batch B] [--hyper-every K] [--gamma G]
 //                  [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z] [--decay constant|invsqrt|plateau]
 //                  [--decay-tau STEPS] [--patience E] [--elbo-floor F] [--adam-lr LR] [--adam-lr-end LR] [--average]
-//                  [--z-stride K] [--epoch-nrmse]
+//                  [--z-stride K] [--epoch-nrmse] [--precision double|mixed]
 // Defaults: atcTrainConfig() (copa_map.hpp). --reduced: every 4th (--z-stride) of the authors' inducing points and
 // exactly --batches mini-batches (default 1000, no time limit: reducedTrainConfig), the configuration of the CI
 // test. --epoch-nrmse prints the test NRMSE after every epoch (one prediction per epoch, diagnostics only).
@@ -56,6 +56,7 @@ int main(int argc, char** argv) {
   std::string decay_name;
   double decay_tau = -1, elbo_floor = -1, adam_lr_end = -1, adam_lr = -1;
   int patience = -1, z_stride = 0;
+  std::string precision;  // "" = atcTrainConfig()'s choice
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--data" && i + 1 < argc) dir = argv[++i];
@@ -83,9 +84,12 @@ int main(int argc, char** argv) {
     else if (a == "--epoch-nrmse") epoch_nrmse = true;
     else if (a == "--average") average = true;
     else if (a == "--z-stride" && i + 1 < argc) z_stride = std::atoi(argv[++i]);
+    else if (a == "--precision" && i + 1 < argc && (std::string(argv[i + 1]) == "double" ||
+                                                    std::string(argv[i + 1]) == "mixed"))
+      precision = argv[++i];
     else {
       std::fprintf(stderr, "usage: %s [--data DIR] [--reduced] [--batches N] [--max-seconds S] [--max-iterations N] "
-                           "[--kmeans-inducing] [--no-gphom] [--no-copa] [--seed N] [--batch B] [--hyper-every K] [--gamma G] [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z] [--decay constant|invsqrt|plateau] [--decay-tau STEPS] [--patience E] [--elbo-floor F] [--adam-lr LR] [--adam-lr-end LR] [--epoch-nrmse] [--average] [--z-stride K]\n", argv[0]);
+                           "[--kmeans-inducing] [--no-gphom] [--no-copa] [--seed N] [--batch B] [--hyper-every K] [--gamma G] [--gamma-end G] [--gphom-gamma G] [--tolerance T] [--train-z] [--decay constant|invsqrt|plateau] [--decay-tau STEPS] [--patience E] [--elbo-floor F] [--adam-lr LR] [--adam-lr-end LR] [--epoch-nrmse] [--average] [--z-stride K] [--precision double|mixed]\n", argv[0]);
       return 2;
     }
   }
@@ -113,6 +117,7 @@ int main(int argc, char** argv) {
     if (adam_lr > 0) tc.adam_lr_start = adam_lr;
     if (adam_lr_end > 0) tc.adam_lr_end = adam_lr_end;
     if (average) tc.average_iterates = true;
+    if (!precision.empty()) tc.mixed_precision = precision == "mixed";
     // CI configuration: every 4th authors' inducing point unless --z-stride says otherwise.
     if (z_stride > 1 || reduced) Z = everyNthRow(Z, z_stride > 0 ? z_stride : 4);
     std::printf("ATC split: %ld train, %ld test points; %ld inducing points (%s)%s\n", (long)train.X.rows(),
@@ -120,10 +125,11 @@ int main(int argc, char** argv) {
                 kmeans_z ? "Δ-weighted k-means" : "authors' Z", reduced ? ", reduced configuration" : "");
     std::printf("config: batch %d, natgrad γ %.2f -> %.2f (GP-Hom %.2f), Adam %g -> %g every %d steps, then %s decay "
                 "(tau %g)%s, at most %d batches and %.0f s per GP model, tolerance %g (floor %g, patience %d), seed %lu, "
-                "GEMM %s\n", batch, gamma, tc.natgrad_gamma_end, gphom_gamma, tc.adam_lr_start, tc.adam_lr_end,
+                "GEMM %s, %s precision\n", batch, gamma, tc.natgrad_gamma_end, gphom_gamma, tc.adam_lr_start, tc.adam_lr_end,
                 hyper_every, stepDecayName(tc.step_decay), tc.decay_tau,
                 tc.average_iterates ? ", iterate averaging" : "", tc.max_iterations,
-                tc.max_seconds, tc.tolerance, tc.elbo_floor, tc.patience, seed, activeGemmKernel().c_str());
+                tc.max_seconds, tc.tolerance, tc.elbo_floor, tc.patience, seed, activeGemmKernel().c_str(),
+                tc.mixed_precision ? "mixed" : "double");
     std::printf("| model      |  NRMSE  | χ² distance  |   NLPD   | cov95  | train [s] | pred [s] |\n");
     std::printf("|------------|---------|--------------|----------|--------|-----------|----------|\n");
 

@@ -25,6 +25,8 @@ TrainConfig atcTrainConfig() {
   tc.tolerance = 1e-3;   // copa-map's relative ELBO change ...
   tc.elbo_floor = 1.0;   // ... but at least 1e-3 nats per point (the ELBO per point is near 0 here)
   tc.patience = 2;       // in 2 consecutive epochs
+  // Single-precision A L and Aᵀ D A products (SvgpModel::setMixedPrecision; docs/benchmarks.md, copa_map).
+  tc.mixed_precision = true;
   tc.max_seconds = 600.0;
   tc.max_iterations = 100000;
   tc.seed = 1;

@@ -10,9 +10,11 @@ namespace detail {
 namespace {
 
 using Fn = void (*)(const GemmArgs&);
+using FnF = void (*)(const GemmArgsF&);
 struct Variant {
   const char* name;
   Fn fn;
+  FnF fnf;
   bool (*supported)();
 };
 
@@ -26,10 +28,10 @@ bool hasAvx512() {
 bool always() { return true; }
 
 const Variant kVariants[] = {
-    {"generic", &gemm_generic, &always},
+    {"generic", &gemm_generic, &gemm_generic, &always},
 #if defined(CAIRN_COPA_HAVE_X86_VARIANTS)
-    {"avx2", &gemm_avx2, &hasAvx2},
-    {"avx512", &gemm_avx512, &hasAvx512},
+    {"avx2", &gemm_avx2, &gemm_avx2, &hasAvx2},
+    {"avx512", &gemm_avx512, &gemm_avx512, &hasAvx512},
 #endif
 };
 
@@ -60,6 +62,11 @@ std::atomic<const Variant*>& current() {
 void gemm(const GemmArgs& g) {
   if (g.M == 0 || g.N == 0) return;
   current().load(std::memory_order_relaxed)->fn(g);
+}
+
+void gemm(const GemmArgsF& g) {
+  if (g.M == 0 || g.N == 0) return;
+  current().load(std::memory_order_relaxed)->fnf(g);
 }
 
 }  // namespace detail

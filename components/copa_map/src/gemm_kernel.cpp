@@ -19,24 +19,24 @@
 namespace cairn::copa_map::detail {
 namespace {
 
+template <class T>
+using Mat = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>;
 using Stride = Eigen::OuterStride<>;
-using ConstMap = Eigen::Map<const Eigen::MatrixXd, 0, Stride>;
-using Map = Eigen::Map<Eigen::MatrixXd, 0, Stride>;
 
-template <class OA, class OB>
-void run(Map& C, const OA& a, const OB& b, double alpha, double beta) {
-  if (beta == 0.0) {
+template <class OA, class OB, class MapC, class T>
+void run(MapC& C, const OA& a, const OB& b, T alpha, T beta) {
+  if (beta == T(0)) {
     C.noalias() = alpha * a * b;
   } else {
-    if (beta != 1.0) C *= beta;
+    if (beta != T(1)) C *= beta;
     C.noalias() += alpha * a * b;
   }
 }
 
-}  // namespace
-
-void CAIRN_GEMM_CAT(gemm_, CAIRN_GEMM_VARIANT)(const GemmArgs& g) {
-  Map C(g.C, g.M, g.N, Stride(g.ldc));
+template <class T>
+void gemmT(const GemmArgsT<T>& g) {
+  using ConstMap = Eigen::Map<const Mat<T>, 0, Stride>;
+  Eigen::Map<Mat<T>, 0, Stride> C(g.C, g.M, g.N, Stride(g.ldc));
   const ConstMap A(g.A, g.trans_a ? g.K : g.M, g.trans_a ? g.M : g.K, Stride(g.lda));
   const ConstMap B(g.B, g.trans_b ? g.N : g.K, g.trans_b ? g.K : g.N, Stride(g.ldb));
   if (!g.trans_a && !g.trans_b) run(C, A, B, g.alpha, g.beta);
@@ -44,5 +44,10 @@ void CAIRN_GEMM_CAT(gemm_, CAIRN_GEMM_VARIANT)(const GemmArgs& g) {
   else if (!g.trans_a && g.trans_b) run(C, A, B.transpose(), g.alpha, g.beta);
   else run(C, A.transpose(), B.transpose(), g.alpha, g.beta);
 }
+
+}  // namespace
+
+void CAIRN_GEMM_CAT(gemm_, CAIRN_GEMM_VARIANT)(const GemmArgs& g) { gemmT(g); }
+void CAIRN_GEMM_CAT(gemm_, CAIRN_GEMM_VARIANT)(const GemmArgsF& g) { gemmT(g); }
 
 }  // namespace cairn::copa_map::detail

@@ -18,14 +18,26 @@ namespace {
 // C = alpha op(A) op(B) + beta C through the run-time dispatched GEMM (gemm.hpp: AVX2/AVX-512 where the CPU has
 // them; Eigen's own product is compiled for the portable baseline only). Blocks of column-major matrices are
 // passed without copies.
-void gemm(Eigen::Ref<Eigen::MatrixXd> C, const Eigen::Ref<const Eigen::MatrixXd>& A, bool trans_a,
-          const Eigen::Ref<const Eigen::MatrixXd>& B, bool trans_b, double alpha = 1.0, double beta = 0.0) {
-  detail::GemmArgs g{trans_a, trans_b, C.rows(), C.cols(), trans_a ? A.rows() : A.cols(), alpha,
-                     A.data(), A.outerStride(), B.data(), B.outerStride(), beta, C.data(), C.outerStride()};
+// The float overload serves the mixed-precision B·m² products (TrainConfig::mixed_precision).
+template <class T>
+void gemmT(Eigen::Ref<Eigen::Matrix<T, -1, -1>> C, const Eigen::Ref<const Eigen::Matrix<T, -1, -1>>& A,
+           bool trans_a, const Eigen::Ref<const Eigen::Matrix<T, -1, -1>>& B, bool trans_b, T alpha, T beta) {
+  detail::GemmArgsT<T> g{trans_a, trans_b, C.rows(), C.cols(), trans_a ? A.rows() : A.cols(), alpha,
+                         A.data(), A.outerStride(), B.data(), B.outerStride(), beta, C.data(), C.outerStride()};
   if ((trans_a ? A.cols() : A.rows()) != g.M || (trans_b ? B.rows() : B.cols()) != g.N ||
       (trans_b ? B.cols() : B.rows()) != g.K)
     throw std::logic_error("gemm: dimension mismatch");
   detail::gemm(g);
+}
+
+void gemm(Eigen::Ref<Eigen::MatrixXd> C, const Eigen::Ref<const Eigen::MatrixXd>& A, bool trans_a,
+          const Eigen::Ref<const Eigen::MatrixXd>& B, bool trans_b, double alpha = 1.0, double beta = 0.0) {
+  gemmT<double>(C, A, trans_a, B, trans_b, alpha, beta);
+}
+
+void gemm(Eigen::Ref<Eigen::MatrixXf> C, const Eigen::Ref<const Eigen::MatrixXf>& A, bool trans_a,
+          const Eigen::Ref<const Eigen::MatrixXf>& B, bool trans_b, float alpha = 1.0f, float beta = 0.0f) {
+  gemmT<float>(C, A, trans_a, B, trans_b, alpha, beta);
 }
 
 Eigen::MatrixXd product(const Eigen::Ref<const Eigen::MatrixXd>& A, bool trans_a,
@@ -265,13 +277,17 @@ SvgpModel::SvgpModel(std::vector<LatentGp> latents, std::unique_ptr<Likelihood> 
 }
 
 SvgpModel::SvgpModel(const SvgpModel& o)
-    : latents_(o.latents_), lik_(o.lik_ ? o.lik_->clone() : nullptr), jitter_(o.jitter_) {}
+    : latents_(o.latents_),
+      lik_(o.lik_ ? o.lik_->clone() : nullptr),
+      jitter_(o.jitter_),
+      mixed_precision_(o.mixed_precision_) {}
 
 SvgpModel& SvgpModel::operator=(const SvgpModel& o) {
   if (this != &o) {
     latents_ = o.latents_;
     lik_ = o.lik_ ? o.lik_->clone() : nullptr;
     jitter_ = o.jitter_;
+    mixed_precision_ = o.mixed_precision_;
   }
   return *this;
 }
@@ -347,55 +363,93 @@ bool choleskyLower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
 }
 
 
-// A L for an n x m A and lower-triangular m x m L: n m² flops (m³/3 when A is lower triangular too, `a_lower`).
-Eigen::MatrixXd timesLower(const Eigen::MatrixXd& A, const Eigen::MatrixXd& L, bool a_lower = false) {
+// A L for an n x m A and lower-triangular m x m L: n m² flops (m³/3 when A is lower triangular too, `a_lower`;
+// its strict upper triangle must then be zero, as lowerInverse leaves it: block row i0 of column block j0 is one
+// dispatched GEMM over columns j0 .. i0 + wi of A, the zeros above A's diagonal included).
+template <class M>
+M timesLower(const M& A, const M& L, bool a_lower = false) {
   const Eigen::Index m = L.rows();
-  Eigen::MatrixXd out = a_lower ? Eigen::MatrixXd::Zero(m, m) : Eigen::MatrixXd(A.rows(), m);
+  M out = a_lower ? M::Zero(m, m) : M(A.rows(), m);
   forColumnBlocks(m, [&](Eigen::Index j0, Eigen::Index w) {
     const Eigen::Index h = m - j0;
-    Eigen::MatrixXd Lb = L.block(j0, j0, h, w);
-    Lb.topRows(w).triangularView<Eigen::StrictlyUpper>().setZero();
-    if (a_lower)
-      out.block(j0, j0, h, w).noalias() = A.block(j0, j0, h, h).triangularView<Eigen::Lower>() * Lb;
-    else
+    M Lb = L.block(j0, j0, h, w);
+    Lb.topRows(w).template triangularView<Eigen::StrictlyUpper>().setZero();
+    if (a_lower) {
+      for (Eigen::Index i0 = j0; i0 < m; i0 += kColBlock) {
+        const Eigen::Index wi = std::min(kColBlock, m - i0), k = i0 + wi - j0;
+        gemm(out.block(i0, j0, wi, w), A.block(i0, j0, wi, k), false, Lb.topRows(k), false);
+      }
+    } else {
       gemm(out.middleCols(j0, w), A.rightCols(h), false, Lb, false);
+    }
   });
   return out;
 }
 
 // Aᵀ diag(d) A (symmetric; only the lower half is multiplied, then mirrored): n m² flops instead of 2 n m².
-Eigen::MatrixXd weightedGram(const Eigen::MatrixXd& A, const Eigen::VectorXd& d) {
+// `a_lower`: A is square and lower triangular (zeros above the diagonal), so rows above column block j0 of A are
+// zero and skipped (2m³/3 instead of m³ flops, e.g. K⁻¹ = L_K⁻ᵀ L_K⁻¹).
+template <class M, class V>
+M weightedGram(const M& A, const V& d, bool a_lower = false) {
   const Eigen::Index m = A.cols();
-  Eigen::MatrixXd out(m, m);
+  M out(m, m);
   forColumnBlocks(m, [&](Eigen::Index j0, Eigen::Index w) {
-    const Eigen::MatrixXd DA = d.asDiagonal() * A.middleCols(j0, w);
-    gemm(out.block(j0, j0, m - j0, w), A.rightCols(m - j0), true, DA, false);
+    const Eigen::Index r0 = a_lower ? j0 : 0, h = A.rows() - r0;
+    const M DA = d.segment(r0, h).asDiagonal() * A.block(r0, j0, h, w);
+    gemm(out.block(j0, j0, m - j0, w), A.block(r0, j0, h, m - j0), true, DA, false);
   });
-  out.triangularView<Eigen::StrictlyUpper>() = out.transpose();
+  out.template triangularView<Eigen::StrictlyUpper>() = out.transpose();
   return out;
 }
 
 struct LatentCache {
   Eigen::MatrixXd Knu, A, AL;
+  Eigen::MatrixXf Af, ALf;  // mixed precision: A and A L in single precision
   Eigen::VectorXd kdiag;
 };
 
+// Rows of a mini-batch block per single-precision partial sum of Aᵀ diag(d) A, added up in double.
+constexpr Eigen::Index kMixedRowChunk = 256;
+
 // q(f) marginals on a batch given K_uu⁻¹ (eqs. 4.13-4.14): m = A μ, v = k_nn - diag(A K_un) + diag(A S Aᵀ).
-void computeMoments(const LatentGp& lat, const Eigen::MatrixXd& Kinv, const Eigen::MatrixXd& X, LatentCache& c,
-                    LatentMoments& q) {
+// Lf != nullptr: mixed precision (TrainConfig::mixed_precision). A = K_nu K_uu⁻¹ stays double (it carries K_uu's
+// conditioning, κ ~ 1e5-1e6 at the jitter used); A L (B m² flops) is formed in single precision from A rounded
+// to float, its squared row norms are summed in double.
+void computeMoments(const LatentGp& lat, const Eigen::MatrixXd& Kinv, const Eigen::MatrixXf* Lf,
+                    const Eigen::MatrixXd& X, LatentCache& c, LatentMoments& q) {
   c.Knu = lat.kernel->K(X, lat.Z);
   c.kdiag = lat.kernel->Kdiag(X);
   c.A = product(c.Knu, false, Kinv, false);  // A = K_nu K_uu⁻¹ (GEMM; faster than two triangular solves)
-  c.AL = timesLower(c.A, lat.L);
   q.m.noalias() = c.A * lat.mu;
-  q.v = c.kdiag - (c.A.array() * c.Knu.array()).rowwise().sum().matrix() +
-        c.AL.array().square().rowwise().sum().matrix();
+  q.v = c.kdiag - (c.A.array() * c.Knu.array()).rowwise().sum().matrix();
+  if (Lf) {
+    c.Af = c.A.cast<float>();
+    c.ALf = timesLower(c.Af, *Lf);
+    q.v += c.ALf.cast<double>().array().square().rowwise().sum().matrix();
+  } else {
+    c.AL = timesLower(c.A, lat.L);
+    q.v += c.AL.array().square().rowwise().sum().matrix();
+  }
   q.v = q.v.cwiseMax(1e-12);
+}
+
+// Aᵀ diag(d) A from the single-precision A: float partial sums over kMixedRowChunk rows, accumulated in double
+// (the accumulation error of one float sum grows with its length; the chunks bound it).
+Eigen::MatrixXd weightedGramMixed(const Eigen::MatrixXf& Af, const Eigen::VectorXd& d) {
+  const Eigen::Index n = Af.rows(), m = Af.cols();
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(m, m);
+  const Eigen::VectorXf df = d.cast<float>();
+  for (Eigen::Index r0 = 0; r0 < n; r0 += kMixedRowChunk) {
+    const Eigen::Index len = std::min(kMixedRowChunk, n - r0);
+    const Eigen::MatrixXf part = weightedGram(Eigen::MatrixXf(Af.middleRows(r0, len)), df.segment(r0, len));
+    out += part.cast<double>();
+  }
+  return out;
 }
 
 Eigen::MatrixXd precisionOf(const LatentGp& lat) {
   if (lat.precision.rows() == lat.L.rows()) return lat.precision;
-  return weightedGram(lowerInverse(lat.L), Eigen::VectorXd::Ones(lat.L.rows()));
+  return weightedGram(lowerInverse(lat.L), Eigen::VectorXd::Ones(lat.L.rows()), true);
 }
 
 }  // namespace
@@ -414,7 +468,7 @@ const SvgpModel::KuuCache& SvgpModel::kuu(int k) const {
   Kuu.diagonal().array() += jitter_;
   if (!choleskyLower(Kuu, c.Lk)) throw std::runtime_error("SVGP: K_uu is not positive definite");
   c.Linv = lowerInverse(c.Lk);
-  c.Kinv = weightedGram(c.Linv, Eigen::VectorXd::Ones(lat.Z.rows()));  // K⁻¹ = L_K⁻ᵀ L_K⁻¹
+  c.Kinv = weightedGram(c.Linv, Eigen::VectorXd::Ones(lat.Z.rows()), true);  // K⁻¹ = L_K⁻ᵀ L_K⁻¹
   c.params = key;
   c.Z = lat.Z;
   return c;
@@ -451,6 +505,8 @@ ElboEvaluation SvgpModel::evaluate(const Eigen::MatrixXd& X, const Eigen::Vector
     // V = K⁻¹L, so that K⁻¹S = V Lᵀ and K⁻¹SK⁻¹ = V Vᵀ: 5 m³ flops instead of forming S and K⁻¹S (7 m³).
     if (hyper_grad || z_grad) V[k] = timesLower(kc[k]->Kinv, latents_[k].L);
   }
+  std::vector<Eigen::MatrixXf> Lf(mixed_precision_ ? unl : 0);
+  for (std::size_t k = 0; k < Lf.size(); ++k) Lf[k] = latents_[k].L.cast<float>();
 
   // The mini-batch is split into one block of rows per core: one fork/join per evaluation instead of one per
   // matrix product, which matters on a loaded 2-core machine where every join can wait for a scheduler slice
@@ -472,7 +528,8 @@ ElboEvaluation SvgpModel::evaluate(const Eigen::MatrixXd& X, const Eigen::Vector
       const Eigen::VectorXd yt = y.segment(r0, len);
       std::vector<LatentCache> cache(unl);
       std::vector<LatentMoments> q(unl), dq;
-      for (std::size_t k = 0; k < unl; ++k) computeMoments(latents_[k], kc[k]->Kinv, Xt, cache[k], q[k]);
+      for (std::size_t k = 0; k < unl; ++k)
+        computeMoments(latents_[k], kc[k]->Kinv, mixed_precision_ ? &Lf[k] : nullptr, Xt, cache[k], q[k]);
       P.ell = lik_->variationalExpectations(yt, q, &dq);
       P.b.resize(unl);
       P.Q.resize(unl);
@@ -482,11 +539,12 @@ ElboEvaluation SvgpModel::evaluate(const Eigen::MatrixXd& X, const Eigen::Vector
         const LatentGp& lat = latents_[k];
         const LatentCache& c = cache[k];
         P.b[k].noalias() = c.A.transpose() * dq[k].m;
-        P.Q[k] = weightedGram(c.A, dq[k].v);
+        P.Q[k] = mixed_precision_ ? weightedGramMixed(c.Af, dq[k].v) : weightedGram(c.A, dq[k].v);
         if (!hyper_grad && !z_grad) continue;
         // ∂(scale E - KL)/∂K_nu = scale [∂E/∂m βᵀ + 2 diag(∂E/∂v)(A S K⁻¹ - A)], chained into the kernel.
         Eigen::MatrixXd ASK = c.A;
-        gemm(ASK, c.AL, false, V[k], true, 1.0, -1.0);  // A S K⁻¹ - A
+        gemm(ASK, mixed_precision_ ? Eigen::MatrixXd(c.ALf.cast<double>()) : c.AL, false, V[k], true, 1.0,
+             -1.0);  // A S K⁻¹ - A
         Eigen::MatrixXd Gnu = dq[k].m * beta[k].transpose();
         Gnu.noalias() += 2.0 * (dq[k].v.asDiagonal() * ASK);
         Gnu *= scale;
@@ -526,10 +584,12 @@ ElboEvaluation SvgpModel::evaluate(const Eigen::MatrixXd& X, const Eigen::Vector
     pl.Kinv = Kinv;
     if (!hyper_grad && !z_grad) continue;
     // ∂/∂K_uu of scale E - KL. Only the symmetric part matters (K_uu is symmetric), so K⁻¹SQ + QSK⁻¹ enters as
-    // 2 K⁻¹SQ.
-    Eigen::MatrixXd Guu = product(V[k], false, timesLower(pl.Q, lat.L), true);  // K⁻¹ S Q
-    Guu = scale * (pl.Q - 2.0 * Guu - pl.b * beta[k].transpose());
-    Guu -= 0.5 * (Kinv - weightedGram(V[k].transpose(), Eigen::VectorXd::Ones(m)) - beta[k] * beta[k].transpose());
+    // 2 K⁻¹SQ. The two S terms share the factor K⁻¹S = V Lᵀ:
+    // -2 scale K⁻¹SQ + ½ K⁻¹SK⁻¹ = V [(½ K⁻¹ - 2 scale Q) L]ᵀ, one triangular (m³) and one dense (2m³) product
+    // instead of forming K⁻¹SQ and K⁻¹SK⁻¹ = VVᵀ separately (4m³).
+    const Eigen::MatrixXd P = 0.5 * Kinv - (2.0 * scale) * pl.Q;
+    Eigen::MatrixXd Guu = product(V[k], false, timesLower(P, lat.L), true);
+    Guu += scale * (pl.Q - pl.b * beta[k].transpose()) - 0.5 * (Kinv - beta[k] * beta[k].transpose());
     // Symmetrize and fold onto the lower triangle: the kernel gradient skips the zero upper half.
     Eigen::MatrixXd Gs = Eigen::MatrixXd::Zero(m, m);
     Gs.triangularView<Eigen::StrictlyLower>() = Guu + Guu.transpose();
@@ -799,6 +859,13 @@ TrainReport trainSvgp(SvgpModel& model, const Eigen::MatrixXd& X, const Eigen::V
   // Tail averaging (TrainConfig::average_iterates): sums over the current and the previous epoch.
   IterateSum avg_cur, avg_prev;
 
+  // Mixed precision for this training only (restored on every return path below by the guard).
+  struct PrecisionGuard {
+    SvgpModel& m;
+    bool saved;
+    ~PrecisionGuard() { m.setMixedPrecision(saved); }
+  } precision_guard{model, model.mixedPrecision()};
+  model.setMixedPrecision(cfg.mixed_precision);
   SvgpModel last_good = model;
   double epoch_sum = 0;
   Eigen::Index epoch_count = 0;

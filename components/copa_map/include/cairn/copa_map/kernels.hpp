@@ -73,6 +73,13 @@ class SpatioTemporalKernel final : public Kernel {
   // Bounds (positive-space) applied to the parameters.
   double min_lengthscale = 0.05, max_lengthscale = 50.0;
   double min_period = 1.0, max_period = 1e4;
+  // K and gradK evaluate the per-axis factors (Matérn in x1, x2; the periodic sum in t) once per distinct pair of
+  // coordinate values and look them up per entry when that is much cheaper than evaluating every entry
+  // (gridded inputs: valueTablesApply). K is bit-identical to the direct evaluation, gradK equal up to rounding.
+  // false: always the direct per-entry evaluation (tests compare both).
+  bool use_value_tables = true;
+  // Whether K(X1, X2) / gradK would take the table path (the tables hold ≤ ¼ of n1·n2 entries).
+  static bool valueTablesApply(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2);
 
  private:
   double ls1_, ls2_;

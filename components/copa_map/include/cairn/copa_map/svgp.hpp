@@ -163,6 +163,11 @@ class SvgpModel {
   const std::vector<LatentGp>& latents() const { return latents_; }
   const Likelihood& likelihood() const { return *lik_; }
   double jitter() const { return jitter_; }
+  // Mixed precision in evaluate(): A L and Aᵀ diag(∂E/∂v) A (2 B m² of the ≈ 4 B m² flops per latent) in single
+  // precision (A = K_nu K_uu⁻¹, the m x m sums and every O(m³) step stay double). Off by default; trainSvgp
+  // switches it on for TrainConfig::mixed_precision. Agreement with the double path: test_svgp.cpp.
+  void setMixedPrecision(bool on) { mixed_precision_ = on; }
+  bool mixedPrecision() const { return mixed_precision_; }
 
  private:
   struct KuuCache {
@@ -177,6 +182,7 @@ class SvgpModel {
   std::vector<LatentGp> latents_;
   std::unique_ptr<Likelihood> lik_;
   double jitter_ = 1e-5;
+  bool mixed_precision_ = false;
   // K_uu factorization per latent, reused while the hyperparameters do not change (evaluate() is therefore not
   // thread-safe; prediction does not use the cache).
   mutable std::vector<KuuCache> kuu_cache_;
@@ -206,6 +212,9 @@ struct TrainConfig {
   // Z). The ELBOs in the report are those of the iterates.
   bool average_iterates = false;
   bool train_hyper = true;
+  // SvgpModel::setMixedPrecision during training (single-precision A L and Aᵀ diag(∂E/∂v) A products); the
+  // model's own setting is restored afterwards. Prediction is always double.
+  bool mixed_precision = false;
   // Adam on the inducing inputs Z of every latent (the "and optionally Z"), on the same steps as the
   // hyperparameters; step size in input units (m, time units). Off by default (see the README for ATC).
   bool train_inducing = false;
