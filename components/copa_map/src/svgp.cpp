@@ -317,9 +317,17 @@ void forColumnBlocks(Eigen::Index m, F&& f) {
   for (Eigen::Index b = 0; b < nb; ++b) f(b * kColBlock, std::min(kColBlock, m - b * kColBlock));
 }
 
+// Inverse of a small lower-triangular diagonal block (Eigen's portable triangular solve; kColBlock³/3 flops).
+Eigen::MatrixXd smallLowerInverse(const Eigen::Ref<const Eigen::MatrixXd>& D) {
+  Eigen::MatrixXd X = Eigen::MatrixXd::Identity(D.rows(), D.cols());
+  D.triangularView<Eigen::Lower>().solveInPlace(X);
+  return X;
+}
+
 // L⁻¹ for lower-triangular L (m³/3 flops). Column block j of the inverse is found block row by block row:
 // X_jj = L_jj⁻¹, X_ij = -L_ii⁻¹ Σ_{j<=k<i} L_ik X_kj, the sum being one dispatched GEMM; column blocks are
-// independent and run on both cores.
+// independent and run on both cores. (Multiplying by precomputed L_ii⁻¹ instead of the triangular solve was
+// measurably less accurate on ill-conditioned K_uu: GemmVariantsAndBatchSplitAgreeWithThePortableSerialOne.)
 Eigen::MatrixXd lowerInverse(const Eigen::MatrixXd& L) {
   const Eigen::Index m = L.rows();
   Eigen::MatrixXd X = Eigen::MatrixXd::Zero(m, m);
@@ -350,9 +358,14 @@ bool choleskyLower(const Eigen::MatrixXd& A, Eigen::MatrixXd& L) {
     if (llt.info() != Eigen::Success) return false;
     L.block(k, k, w, w) = llt.matrixL();
     if (r == 0) break;
-    auto panel = L.block(k + w, k, r, w);
-    llt.matrixU().solveInPlace<Eigen::OnTheRight>(panel);  // L21 = A21 L11⁻ᵀ
-    const Eigen::MatrixXd P = panel;
+    // L21 = A21 L11⁻ᵀ as one dispatched GEMM with the small inverse (Eigen's triangular solve is portable code).
+    const Eigen::MatrixXd L11inv = smallLowerInverse(L.block(k, k, w, w));
+    Eigen::MatrixXd P(r, w);
+    {
+      ThreadLimit one(0.0);  // r x w x w: a fork/join of its own would cost more than it saves on a busy box
+      gemm(P, L.block(k + w, k, r, w), false, L11inv, true);
+    }
+    L.block(k + w, k, r, w) = P;
     forColumnBlocks(r, [&](Eigen::Index j0, Eigen::Index wj) {
       gemm(L.block(k + w + j0, k + w + j0, r - j0, wj), P.bottomRows(r - j0), false, P.middleRows(j0, wj), true,
            -1.0, 1.0);
@@ -544,7 +557,7 @@ ElboEvaluation SvgpModel::evaluate(const Eigen::MatrixXd& X, const Eigen::Vector
         // ∂(scale E - KL)/∂K_nu = scale [∂E/∂m βᵀ + 2 diag(∂E/∂v)(A S K⁻¹ - A)], chained into the kernel.
         Eigen::MatrixXd ASK = c.A;
         gemm(ASK, mixed_precision_ ? Eigen::MatrixXd(c.ALf.cast<double>()) : c.AL, false, V[k], true, 1.0,
-             -1.0);  // A S K⁻¹ - A
+             -1.0);  // A S K⁻¹ - A (double: in float, V = K⁻¹L's large entries cost up to 2e-3 of the gradient)
         Eigen::MatrixXd Gnu = dq[k].m * beta[k].transpose();
         Gnu.noalias() += 2.0 * (dq[k].v.asDiagonal() * ASK);
         Gnu *= scale;
