@@ -117,6 +117,7 @@ void applyConfig(const std::string& path, CopaMapConfig& mc, TrainConfig& tc) {
     else if (key == "decay_tau") tc.decay_tau = v;
     else if (key == "plateau_factor") tc.plateau_factor = v;
     else if (key == "average_iterates") tc.average_iterates = v != 0;
+    else if (key == "mixed_precision") tc.mixed_precision = v != 0;
     else if (key == "seed") tc.seed = mc.seed = mc.period_init.seed = static_cast<std::uint64_t>(v);
     else if (key == "alpha_ind") mc.alpha_ind = v;
     else if (key == "g_inducing_ratio") mc.g_inducing_ratio = v;
