@@ -262,9 +262,9 @@ namespace {
 
 void gradKTables(const SpatioTemporalKernel& kern, const AxisPairs& p, const Eigen::MatrixXd& G,
                  std::vector<Eigen::VectorXd>& parts) {
-  const std::vector<PeriodicComponent>& comps_ = kern.components();
-  const double ls1_ = kern.lengthscale1(), ls2_ = kern.lengthscale2();
-  const std::size_t nc = comps_.size();
+  const std::vector<PeriodicComponent>& comps = kern.components();
+  const double ls[2] = {kern.lengthscale1(), kern.lengthscale2()};
+  const std::size_t nc = comps.size();
   const auto size = [&](int d) {
     return std::pair<Eigen::Index, Eigen::Index>(static_cast<Eigen::Index>(p.a[d].v.size()),
                                                  static_cast<Eigen::Index>(p.b[d].v.size()));
@@ -277,7 +277,7 @@ void gradKTables(const SpatioTemporalKernel& kern, const AxisPairs& p, const Eig
     for (Eigen::Index jb = 0; jb < ub; ++jb)
       for (Eigen::Index ia = 0; ia < ua; ++ia)
         matern52(p.a[d].v[static_cast<std::size_t>(ia)] - p.b[d].v[static_cast<std::size_t>(jb)],
-                 d == 0 ? ls1_ : ls2_, Ks[d](ia, jb), Ds[d](ia, jb));
+                 ls[d], Ks[d](ia, jb), Ds[d](ia, jb));
   }
   const auto [uta, utb] = size(2);
   Eigen::MatrixXd Kt = Eigen::MatrixXd::Zero(uta, utb);
@@ -288,9 +288,9 @@ void gradKTables(const SpatioTemporalKernel& kern, const AxisPairs& p, const Eig
     for (Eigen::Index ia = 0; ia < uta; ++ia) {
       const double dt = p.a[2].v[static_cast<std::size_t>(ia)] - p.b[2].v[static_cast<std::size_t>(jb)];
       for (std::size_t c = 0; c < nc; ++c) {
-        const double arg = kPi * dt / comps_[c].period, sc = std::sin(arg);
-        const double l2 = comps_[c].lengthscale * comps_[c].lengthscale;
-        const double pc = comps_[c].variance * std::exp(-0.5 * sc * sc / l2);
+        const double arg = kPi * dt / comps[c].period, sc = std::sin(arg);
+        const double l2 = comps[c].lengthscale * comps[c].lengthscale;
+        const double pc = comps[c].variance * std::exp(-0.5 * sc * sc / l2);
         Kt(ia, jb) += pc;
         Pv[c](ia, jb) = pc;
         Pp[c](ia, jb) = pc * sc * std::cos(arg) * arg / l2;

@@ -5,7 +5,8 @@
 // (eq. 4.20). The bound is the issue's: at most 5 % above the NRMSE of the full configuration (m_f = 1,915,
 // atcTrainConfig, converged by its ELBO criterion in 10 minutes on 2 cores) measured in docs/benchmarks.md
 // (copa_map). Measured: reduced 0.8055 = 1.040 x full 0.7749 with the AVX-512, AVX2 and portable GEMM variants
-// (other CPUs) alike, mixed precision as in atcTrainConfig. The test fails if training or the model breaks or the schedule loses its settling.
+// (other CPUs) alike, mixed precision as in atcTrainConfig. The test fails if training or the model breaks or the
+// schedule loses its settling.
 #include <gtest/gtest.h>
 
 #include <cstdio>

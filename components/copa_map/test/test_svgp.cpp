@@ -25,6 +25,14 @@ std::unique_ptr<Kernel> stKernel() {
       1.7, 2.3, std::vector<PeriodicComponent>{{0.8, 12.0, 0.9}, {0.3, 6.0, 1.3}});
 }
 
+// n standard-normal targets.
+Eigen::VectorXd normalTargets(int n, std::mt19937_64& rng) {
+  std::normal_distribution<double> nd(0.0, 1.0);
+  Eigen::VectorXd y(n);
+  for (int i = 0; i < n; ++i) y[i] = nd(rng);
+  return y;
+}
+
 // Random q(u) so that all gradient terms are exercised.
 void randomizeQ(LatentGp& lat, std::mt19937_64& rng) {
   std::normal_distribution<double> nd(0.0, 1.0);
@@ -362,9 +370,7 @@ TEST(CopaSvgp, GemmVariantsAndBatchSplitAgreeWithThePortableSerialOne) {
   std::mt19937_64 rng(11);
   const SvgpModel base = heteroModel(rng, 300);
   const Eigen::MatrixXd X = randomInputs(400, rng);
-  Eigen::VectorXd y(400);
-  std::normal_distribution<double> nd(0.0, 1.0);
-  for (int i = 0; i < 400; ++i) y[i] = nd(rng);
+  const Eigen::VectorXd y = normalTargets(400, rng);
   auto run = [&](const std::string& variant, ElboEvaluation& ev, SvgpModel& stepped) {
     selectGemmKernel(variant);
     stepped = base;
@@ -416,9 +422,7 @@ TEST(CopaSvgp, MixedPrecisionAgreesWithTheDoublePath) {
   std::mt19937_64 rng(13);
   const SvgpModel base = heteroModel(rng, 300);
   const Eigen::MatrixXd X = randomInputs(700, rng);
-  Eigen::VectorXd y(700);
-  std::normal_distribution<double> nd(0.0, 1.0);
-  for (int i = 0; i < 700; ++i) y[i] = nd(rng);
+  const Eigen::VectorXd y = normalTargets(700, rng);
   SvgpModel dbl = base, mix = base;
   mix.setMixedPrecision(true);
   ASSERT_TRUE(mix.mixedPrecision());
@@ -435,8 +439,7 @@ TEST(CopaSvgp, MixedPrecisionAgreesWithTheDoublePath) {
   // stochastic natural-gradient steps live with anyway.
   SvgpModel other = base;
   const Eigen::MatrixXd X2 = randomInputs(700, rng);
-  Eigen::VectorXd y2(700);
-  for (int i = 0; i < 700; ++i) y2[i] = nd(rng);
+  const Eigen::VectorXd y2 = normalTargets(700, rng);
   const ElboEvaluation d2 = other.evaluate(X2, y2, 3.0, false);
   for (int k = 0; k < 2; ++k) {
     EXPECT_EQ(dbl.naturalGradientStep(k, d, 3.0, 0.5), 0.5);
@@ -455,8 +458,7 @@ TEST(CopaSvgp, MixedPrecisionAgreesWithTheDoublePath) {
   EXPECT_NEAR(mix.evaluate(X, y, 3.0, false).elbo, dbl.evaluate(X, y, 3.0, false).elbo, 1e-6 * std::abs(d.elbo));
   // Training: the setting is applied for the run and the model's own flag restored.
   const Eigen::MatrixXd Xt = randomInputs(600, rng);
-  Eigen::VectorXd yt(600);
-  for (int i = 0; i < 600; ++i) yt[i] = std::sin(Xt(i, 0)) + 0.3 * nd(rng);
+  const Eigen::VectorXd yt = Xt.col(0).array().sin().matrix() + 0.3 * normalTargets(600, rng);
   std::vector<LatentGp> lat;
   lat.emplace_back(stKernel(), randomInputs(60, rng));
   lat.emplace_back(std::make_unique<RbfKernel>(0.7, Eigen::Vector3d(2.0, 3.0, 10.0)), randomInputs(20, rng));
