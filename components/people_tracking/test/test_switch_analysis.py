@@ -1,0 +1,76 @@
+#!/usr/bin/env python3
+"""Test of tools/switch_analysis.py (ctest people_tracking_test_switch_analysis).
+
+  test_switch_analysis.py CAIRN_PEOPLE_EXE TRAJECTORY_FILE
+
+1. A scripted dump with two people walking side by side 0.8 m apart: at t = 0.5 s person 1's track moves onto
+   person 2 and person 1 gets a new track, person 2's own track is deleted. Two switches with known classes.
+2. The tool's re-scoring of a real `cairn people bench --dump` equals the bench's id_switches.
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools"))
+import switch_analysis  # noqa: E402
+
+
+def write(path, header, rows):
+    with open(path, "w") as f:
+        f.write(header + "\n")
+        for r in rows:
+            f.write(",".join(str(x) for x in r) + "\n")
+
+
+def scripted(d):
+    gt, tracks, state = [], [], []
+    for k in range(11):
+        t = round(0.1 * k, 1)
+        a, b = (0.1 * k, 0.0), (0.1 * k, 0.8)
+        gt += [(t, 1, *a), (t, 2, *b)]
+        on = {10: a, 20: b} if k < 5 else {10: b, 30: a}  # at 0.5 s: track 10 jumps to person 2, 20 is gone
+        for i, p in on.items():
+            tracks.append((t, i, *p))
+            state.append((t, i, *p, 1.0, 0.0, 1, 0, 0))
+    write(d + "/groundtruth.csv", "t,id,x,y", gt)
+    write(d + "/tracks.csv", "t,id,x,y", tracks)
+    write(d + "/tracker_state.csv", "t,id,x,y,vx,vy,confirmed,coast_s,visibility", state)
+
+
+def main():
+    exe, traj = sys.argv[1], sys.argv[2]
+    failures = []
+
+    def check(cond, what):
+        if not cond:
+            failures.append(what)
+
+    with tempfile.TemporaryDirectory() as d:
+        scripted(d)
+        sw = sorted(switch_analysis.analyse(d), key=lambda s: s["person"])
+        check(len(sw) == 2, f"scripted: expected 2 switches, got {len(sw)}")
+        if len(sw) == 2:
+            a, b = sw
+            check((a["old"], a["new_id"], a["old_class"], a["new_class"]) == (10, 30, "on_other", "new"),
+                  f"scripted person 1: {a}")
+            check((b["old"], b["new_id"], b["old_class"], b["new_class"]) == (20, 10, "deleted", "from_other"),
+                  f"scripted person 2: {b}")
+            check(all(s["early"] and s["young"] and s["group"] for s in sw), f"scripted flags: {sw}")
+            check(abs(a["nearest"] - 0.8) < 1e-9, f"scripted nearest: {a['nearest']}")
+    with tempfile.TemporaryDirectory() as d:
+        out = subprocess.run([exe, "bench", "--world", "auto", "--trajectories", traj, "--seed", "1", "--json",
+                              "--dump", d], check=True, capture_output=True, text=True).stdout
+        bench = json.loads(out)["cairn"]["id_switches"]
+        mine = len(switch_analysis.analyse(d))
+        check(bench > 0, "bench excerpt has no switches: the comparison would be vacuous")
+        check(mine == bench, f"re-scoring gives {mine} switches, the bench {bench}")
+    for f in failures:
+        print("FAIL:", f)
+    print("ok" if not failures else f"{len(failures)} failure(s)")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
