@@ -91,7 +91,7 @@ void usage() {
       "        [--reid-window S] [--publish-coast S] [--split-scans K] [--confirm-hits N] [--single-leg-stride M]\n"
       "        [--min-leg-confidence C] [--track-leg-confidence C] [--dump DIR] [--json]\n"
       "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--robot follow|route]\n"
-      "             [--keep-spurs] [--follow-distance M] [--fov-deg 360] [--mask tangents|inside] [--model FILE]\n"
+      "             [--keep-spurs] [--follow-distance M] [--fov-deg 360] [--range-max 20] [--mask tangents|inside] [--model FILE]\n"
       "             [--heading-drift R] [--scale-error E] [--max-duration S] [--json]");
 }
 

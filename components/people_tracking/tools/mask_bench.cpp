@@ -165,6 +165,7 @@ MaskBenchResult runMaskBench(const MaskBenchParams& p) {
   cfg.odometry.heading_drift = p.heading_drift;
   cfg.odometry.scale_error = p.scale_error;
   cfg.laser.fov = p.fov_deg * M_PI / 180.0;
+  cfg.laser.range_max = p.range_max;
   cfg.start = sim::Pose2{route[0].x, route[0].y, std::atan2(r1.y() - r0.y(), r1.x() - r0.x())};
   sim::Simulator s(world, cfg);
   if (!p.follow) {
@@ -376,12 +377,14 @@ int runMaskBenchVerb(int argc, char** argv) {
     } else if (a == "--keep-spurs") p.keep_spurs = true;
     else if (a == "--follow-distance") p.follow_distance = number(value());
     else if (a == "--fov-deg") p.fov_deg = number(value());
+    else if (a == "--range-max") p.range_max = number(value());
     else if (a == "--model") p.model = value();
     else if (a == "--mask") p.mask = parseMaskMode(value(), "--mask");
     else throw InputError("unknown mask-bench option '" + a + "'");
   }
   if (!(p.speed > 0.05 && p.speed < 3.0)) throw InputError("--speed must be in (0.05, 3) m/s");
   if (!(p.fov_deg >= 30.0 && p.fov_deg <= 360.0)) throw InputError("--fov-deg must be in [30, 360]");
+  if (!(p.range_max >= 2.0 && p.range_max <= 80.0)) throw InputError("--range-max must be in [2, 80] m");
   if (!(p.follow_distance > 0.3 && p.follow_distance < 5.0)) throw InputError("--follow-distance must be in (0.3, 5) m");
   return printMaskBench(p, runMaskBench(p));
 }

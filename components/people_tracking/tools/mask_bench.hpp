@@ -28,6 +28,7 @@ struct MaskBenchParams {
   double max_w = 1.0;           // rad/s
   std::string model;            // leg classifier ("" = the shipped default AdaBoost model)
   double fov_deg = 360.0;       // laser field of view (Yuan's robot: a front laser; 180 deg is the closer setting)
+  double range_max = 20.0;      // m, laser range (sim default; SICK LMS 200 ~8 m indoors, Hokuyo URG-04LX 4-5.6 m)
   MaskMode mask = MaskMode::kTangents;  // Yuan's tangent mask, or cairn's returns-inside variant
   bool json = false;
 };
