@@ -10,6 +10,7 @@ void ClearMot::addFrame(const std::vector<MotObject>& gt, const std::vector<MotO
   m_.gt += gt.size();
   for (const auto& g : gt) seen_gt_[g.id] = true;
   std::vector<int> gt_match(gt.size(), -1);  // index into hyp
+  std::vector<int> switched_from(gt.size(), -1);
   std::vector<bool> hyp_used(hyp.size(), false);
   // 1. Keep last frame's correspondences that are still valid.
   for (std::size_t i = 0; i < gt.size(); ++i) {
@@ -42,11 +43,15 @@ void ClearMot::addFrame(const std::vector<MotObject>& gt, const std::vector<MotO
         gt_match[rows[r]] = static_cast<int>(j);
         hyp_used[j] = true;
         const auto last = last_match_.find(gt[rows[r]].id);
-        if (last != last_match_.end() && last->second != hyp[j].id) ++m_.id_switches;
+        if (last != last_match_.end() && last->second != hyp[j].id) {
+          ++m_.id_switches;
+          switched_from[rows[r]] = last->second;
+        }
       }
   }
   // 3. Count.
   current_.clear();
+  frame_.clear();
   for (std::size_t i = 0; i < gt.size(); ++i) {
     if (gt_match[i] < 0) {
       ++m_.fn;
@@ -56,6 +61,7 @@ void ClearMot::addFrame(const std::vector<MotObject>& gt, const std::vector<MotO
     ++m_.matches;
     m_.distance_sum += (h.p - gt[i].p).norm();
     current_[gt[i].id] = h.id;
+    frame_.push_back({gt[i].id, h.id, switched_from[i]});
     last_match_[gt[i].id] = h.id;
   }
   for (std::size_t j = 0; j < hyp.size(); ++j) {

@@ -30,6 +30,28 @@ TEST(ClearMot, CountsMatchesMissesFalsePositivesAndSwitches) {
   EXPECT_NEAR(m.idSwitchesPer100Tracks(), 50.0, 1e-12);
 }
 
+TEST(ClearMot, LastFrameListsCorrespondencesAndTheSwitchedFromTrack) {
+  ClearMot mot(0.5);
+  mot.addFrame({{1, {0, 0}}, {2, {5, 0}}}, {{10, {0.1, 0}}, {20, {5, 0.2}}});
+  ASSERT_EQ(mot.lastFrame().size(), 2u);
+  for (const auto& c : mot.lastFrame()) EXPECT_EQ(c.switched_from, -1);
+  mot.addFrame({{1, {0, 0}}, {2, {5, 0}}}, {{10, {0.1, 0}}});  // 2 unmatched: only 1 listed
+  ASSERT_EQ(mot.lastFrame().size(), 1u);
+  EXPECT_EQ(mot.lastFrame()[0].gt, 1);
+  mot.addFrame({{1, {0, 0}}, {2, {5, 0}}}, {{11, {0.0, 0}}, {20, {5, 0}}});  // 1: 10 -> 11, 2 keeps 20 after a gap
+  ASSERT_EQ(mot.lastFrame().size(), 2u);
+  for (const auto& c : mot.lastFrame()) {
+    if (c.gt == 1) {
+      EXPECT_EQ(c.hyp, 11);
+      EXPECT_EQ(c.switched_from, 10);
+    } else {
+      EXPECT_EQ(c.hyp, 20);
+      EXPECT_EQ(c.switched_from, -1);
+    }
+  }
+  EXPECT_EQ(mot.metrics().id_switches, 1u);
+}
+
 TEST(ClearMot, KeepsCorrespondenceOverACloserHypothesis) {
   // Once 1<->10 is established it is kept while within the threshold even if 11 is closer: no switch.
   ClearMot mot(0.5);

@@ -5,7 +5,7 @@
 
 1. A scripted dump with two people walking side by side 0.8 m apart: at t = 0.5 s person 1's track moves onto
    person 2 and person 1 gets a new track, person 2's own track is deleted. Two switches with known classes.
-2. The tool's re-scoring of a real `cairn people bench --dump` equals the bench's id_switches.
+2. The switches a real `cairn people bench --dump` lists in matches.csv are the bench's id_switches.
 """
 import json
 import os
@@ -25,17 +25,20 @@ def write(path, header, rows):
 
 
 def scripted(d):
-    gt, tracks, state = [], [], []
+    gt, matches, state = [], [], []
     for k in range(11):
         t = round(0.1 * k, 1)
         a, b = (0.1 * k, 0.0), (0.1 * k, 0.8)
         gt += [(t, 1, *a), (t, 2, *b)]
         on = {10: a, 20: b} if k < 5 else {10: b, 30: a}  # at 0.5 s: track 10 jumps to person 2, 20 is gone
         for i, p in on.items():
-            tracks.append((t, i, *p))
             state.append((t, i, *p, 1.0, 0.0, 1, 0, 0))
+        if k < 5:
+            matches += [(t, 1, 10, -1), (t, 2, 20, -1)]
+        else:  # the scorer's view: person 1 switched 10 -> 30, person 2 switched 20 -> 10 (at k = 5 only)
+            matches += [(t, 1, 30, 10 if k == 5 else -1), (t, 2, 10, 20 if k == 5 else -1)]
     write(d + "/groundtruth.csv", "t,id,x,y", gt)
-    write(d + "/tracks.csv", "t,id,x,y", tracks)
+    write(d + "/matches.csv", "t,person,track,switched_from", matches)
     write(d + "/tracker_state.csv", "t,id,x,y,vx,vy,confirmed,coast_s,visibility", state)
 
 
@@ -65,7 +68,7 @@ def main():
         bench = json.loads(out)["cairn"]["id_switches"]
         mine = len(switch_analysis.analyse(d))
         check(bench > 0, "bench excerpt has no switches: the comparison would be vacuous")
-        check(mine == bench, f"re-scoring gives {mine} switches, the bench {bench}")
+        check(mine == bench, f"matches.csv lists {mine} switches, the bench counted {bench}")
     for f in failures:
         print("FAIL:", f)
     print("ok" if not failures else f"{len(failures)} failure(s)")

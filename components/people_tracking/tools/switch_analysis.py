@@ -3,9 +3,8 @@
 
   switch_analysis.py DIR [DIR ...] [--list]
 
-Re-scores each dump (groundtruth.csv, tracks.csv, tracker_state.csv) with CLEAR MOT as the bench does (last frame's
-correspondences kept while within 0.5 m, then nearest pairs first; the totals equal the bench's id_switches on the
-runs checked) and, for every switch of person g from published id A to B, reports:
+Reads each dump (groundtruth.csv, tracker_state.csv, and matches.csv: the bench's own CLEAR MOT correspondences
+with the switched-from track, so the switches are exactly the bench's id_switches) and, for every switch of person g from published id A to B, reports:
   old track A at the switch: on_other (published on another person), alive_far (internal track > 0.5 m away,
     on nobody), alive_near (internal, within 0.5 m but not published: coasting or free space), deleted;
   new track B: new (born < 1 s before, on nobody else before), from_other (was on another person before),
@@ -20,7 +19,7 @@ import csv
 import math
 import sys
 
-THRESHOLD = 0.5
+THRESHOLD = 0.5  # m, the bench's match threshold (for "alive_far")
 
 
 def by_time(path):
@@ -32,13 +31,13 @@ def by_time(path):
 
 
 def analyse(d):
-    gt, tr, st = by_time(d + "/groundtruth.csv"), by_time(d + "/tracks.csv"), by_time(d + "/tracker_state.csv")
-    last, cur, on_person = {}, {}, collections.defaultdict(set)  # hyp id -> persons it was matched to
+    gt, mt, st = by_time(d + "/groundtruth.csv"), by_time(d + "/matches.csv"), by_time(d + "/tracker_state.csv")
+    on_person = collections.defaultdict(set)  # track id -> persons it was matched to so far
     first_state, confirmed_at, first_counted = {}, {}, {}
     out = []
-    for t in sorted(set(gt) | set(tr) | set(st)):
+    for t in sorted(set(gt) | set(mt) | set(st)):
         G = [(int(r["id"]), float(r["x"]), float(r["y"])) for r in gt.get(t, [])]
-        H = [(int(r["id"]), float(r["x"]), float(r["y"])) for r in tr.get(t, [])]
+        M = [(int(r["person"]), int(r["track"]), int(r["switched_from"])) for r in mt.get(t, [])]
         S = {int(r["id"]): r for r in st.get(t, [])}
         for g, x, y in G:
             first_counted.setdefault(g, t)
@@ -47,41 +46,27 @@ def analyse(d):
             if r["confirmed"] == "1" and i not in confirmed_at:
                 others = sorted(math.hypot(float(r["x"]) - x, float(r["y"]) - y) for _, x, y in G)
                 confirmed_at[i] = (t, len(others) > 1 and others[1] < 1.0)
-        match, used = {}, set()
-        for g, x, y in G:  # keep last frame's correspondences
-            for h, hx, hy in H:
-                if cur.get(g) == h and h not in used and math.hypot(hx - x, hy - y) <= THRESHOLD:
-                    match[g] = h
-                    used.add(h)
-        pairs = sorted((math.hypot(hx - x, hy - y), g, h) for g, x, y in G if g not in match
-                       for h, hx, hy in H if h not in used and math.hypot(hx - x, hy - y) <= THRESHOLD)
-        fresh = set()
-        for _, g, h in pairs:
-            if g in match or h in used:
-                continue
-            match[g], fresh = h, fresh | {g}
-            used.add(h)
+        match = {g: h for g, h, _ in M}
         pos = {g: (x, y) for g, x, y in G}
+        for g, h, a in M:
+            if a < 0:
+                continue
+            x, y = pos[g]
+            if any(h2 == a for g2, h2 in match.items() if g2 != g):
+                old = "on_other"
+            elif a in S:
+                far = math.hypot(float(S[a]["x"]) - x, float(S[a]["y"]) - y) > THRESHOLD
+                old = "alive_far" if far else "alive_near"
+            else:
+                old = "deleted"
+            others = on_person[h] - {g}
+            new = "from_other" if others else ("new" if t - first_state.get(h, t) < 1.0 else "old_unmatched")
+            near = min([math.hypot(x - x2, y - y2) for g2, x2, y2 in G if g2 != g] or [float("inf")])
+            conf_t, group = confirmed_at.get(a, (t, False))
+            out.append({"t": t, "person": g, "old": a, "new_id": h, "old_class": old, "new_class": new,
+                        "early": t - first_counted[g] < 3.0, "young": t - conf_t < 3.0, "group": group,
+                        "nearest": near})
         for g, h in match.items():
-            if g in fresh and g in last and last[g] != h:
-                a, (x, y) = last[g], pos[g]
-                if any(h2 == a for g2, h2 in match.items() if g2 != g):
-                    old = "on_other"
-                elif a in S:
-                    far = math.hypot(float(S[a]["x"]) - x, float(S[a]["y"]) - y) > THRESHOLD
-                    old = "alive_far" if far else "alive_near"
-                else:
-                    old = "deleted"
-                others = on_person[h] - {g}
-                new = "from_other" if others else ("new" if t - first_state.get(h, t) < 1.0 else "old_unmatched")
-                near = min([math.hypot(x - x2, y - y2) for g2, x2, y2 in G if g2 != g] or [float("inf")])
-                conf_t, group = confirmed_at.get(a, (t, False))
-                out.append({"t": t, "person": g, "old": a, "new_id": h, "old_class": old, "new_class": new,
-                            "early": t - first_counted[g] < 3.0, "young": t - conf_t < 3.0, "group": group,
-                            "nearest": near})
-        cur = dict(match)
-        for g, h in match.items():
-            last[g] = h
             on_person[h].add(g)
     return out
 

@@ -23,6 +23,12 @@ struct MotMetrics {
   [[nodiscard]] double idSwitchesPer100Tracks() const { return gt_tracks ? 100.0 * double(id_switches) / double(gt_tracks) : 0.0; }
 };
 
+// One correspondence of the last frame: ground-truth id, hypothesis id, and the hypothesis the object was matched
+// to at its previous match if this one is an ID switch (-1 otherwise).
+struct MotCorrespondence {
+  int gt = 0, hyp = 0, switched_from = -1;
+};
+
 class ClearMot {
  public:
   explicit ClearMot(double threshold = 0.5) : threshold_(threshold) {}
@@ -31,6 +37,8 @@ class ClearMot {
   void addFrame(const std::vector<MotObject>& gt, const std::vector<MotObject>& hyp,
                 const std::vector<Eigen::Vector2d>& dont_care = {});
   [[nodiscard]] MotMetrics metrics() const;
+  // The correspondences of the last addFrame (for dumps and switch analysis: one scorer, no re-matching).
+  [[nodiscard]] const std::vector<MotCorrespondence>& lastFrame() const { return frame_; }
 
  private:
   double threshold_;
@@ -38,6 +46,7 @@ class ClearMot {
   std::map<int, int> last_match_;  // gt id -> hypothesis id at its last match
   std::map<int, int> current_;     // gt id -> hypothesis id matched in the previous frame
   std::map<int, bool> seen_gt_;
+  std::vector<MotCorrespondence> frame_;
 };
 
 }  // namespace cairn::people_tracking
