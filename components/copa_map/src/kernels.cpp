@@ -198,6 +198,19 @@ double periodicSum(const std::vector<PeriodicComponent>& comps, double dt) {
   return kt;
 }
 
+// One component of eq. 4.10 at time difference dt and its derivatives by log σ², log p and log l (the first
+// equals the value): shared by the direct and the table path of gradK.
+struct PeriodicTerm {
+  double value, d_log_period, d_log_lengthscale;
+};
+
+PeriodicTerm periodicTerm(const PeriodicComponent& c, double dt) {
+  const double arg = kPi * dt / c.period, s = std::sin(arg);
+  const double l2 = c.lengthscale * c.lengthscale;
+  const double v = c.variance * std::exp(-0.5 * s * s / l2);  // eq. 4.10
+  return {v, v * s * std::cos(arg) * arg / l2, v * s * s / l2};
+}
+
 }  // namespace
 
 Eigen::MatrixXd SpatioTemporalKernel::K(const Eigen::MatrixXd& X1, const Eigen::MatrixXd& X2) const {
@@ -288,13 +301,11 @@ void gradKTables(const SpatioTemporalKernel& kern, const AxisPairs& p, const Eig
     for (Eigen::Index ia = 0; ia < uta; ++ia) {
       const double dt = p.a[2].v[static_cast<std::size_t>(ia)] - p.b[2].v[static_cast<std::size_t>(jb)];
       for (std::size_t c = 0; c < nc; ++c) {
-        const double arg = kPi * dt / comps[c].period, sc = std::sin(arg);
-        const double l2 = comps[c].lengthscale * comps[c].lengthscale;
-        const double pc = comps[c].variance * std::exp(-0.5 * sc * sc / l2);
-        Kt(ia, jb) += pc;
-        Pv[c](ia, jb) = pc;
-        Pp[c](ia, jb) = pc * sc * std::cos(arg) * arg / l2;
-        Pl[c](ia, jb) = pc * sc * sc / l2;
+        const PeriodicTerm pt = periodicTerm(comps[c], dt);
+        Kt(ia, jb) += pt.value;
+        Pv[c](ia, jb) = pt.value;
+        Pp[c](ia, jb) = pt.d_log_period;
+        Pl[c](ia, jb) = pt.d_log_lengthscale;
       }
     }
   const Eigen::Index n1 = G.rows(), n2 = G.cols();
@@ -349,7 +360,7 @@ Eigen::VectorXd SpatioTemporalKernel::gradK(const Eigen::MatrixXd& X1, const Eig
 #pragma omp parallel if (n1 * n2 > kParallelMin)
   {
     Eigen::VectorXd& acc = parts[static_cast<std::size_t>(omp_get_thread_num())];
-    std::vector<double> pc(comps_.size()), sc(comps_.size()), arg(comps_.size());
+    std::vector<PeriodicTerm> pt(comps_.size());
 #pragma omp for schedule(dynamic, 32)
     for (Eigen::Index j = 0; j < n2; ++j) {
       for (Eigen::Index i = 0; i < n1; ++i) {
@@ -361,20 +372,16 @@ Eigen::VectorXd SpatioTemporalKernel::gradK(const Eigen::MatrixXd& X1, const Eig
         const double dt = X1(i, 2) - X2(j, 2);
         double kt = 0.0;
         for (std::size_t c = 0; c < comps_.size(); ++c) {
-          arg[c] = kPi * dt / comps_[c].period;
-          sc[c] = std::sin(arg[c]);
-          pc[c] = comps_[c].variance *
-                  std::exp(-0.5 * sc[c] * sc[c] / (comps_[c].lengthscale * comps_[c].lengthscale));
-          kt += pc[c];
+          pt[c] = periodicTerm(comps_[c], dt);
+          kt += pt[c].value;
         }
         acc[0] += gij * d1 * k2 * kt;
         acc[1] += gij * k1 * d2 * kt;
         const double ks = gij * k1 * k2;
         for (std::size_t c = 0; c < comps_.size(); ++c) {
-          const double l2 = comps_[c].lengthscale * comps_[c].lengthscale;
-          acc[2 + 3 * c] += ks * pc[c];                                             // ∂/∂log σ²
-          acc[3 + 3 * c] += ks * pc[c] * sc[c] * std::cos(arg[c]) * arg[c] / l2;    // ∂/∂log p
-          acc[4 + 3 * c] += ks * pc[c] * sc[c] * sc[c] / l2;                        // ∂/∂log l
+          acc[2 + 3 * c] += ks * pt[c].value;              // ∂/∂log σ²
+          acc[3 + 3 * c] += ks * pt[c].d_log_period;       // ∂/∂log p
+          acc[4 + 3 * c] += ks * pt[c].d_log_lengthscale;  // ∂/∂log l
         }
       }
     }
