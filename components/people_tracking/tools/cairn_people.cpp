@@ -90,6 +90,10 @@ void usage() {
       "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S]\n"
       "        [--reid-window S] [--publish-coast S] [--split-scans K] [--confirm-hits N] [--single-leg-stride M]\n"
       "        [--min-leg-confidence C] [--track-leg-confidence C] [--dump DIR] [--json]\n"
+      "        tracker tuning (README): [--process-noise Q] [--delete-timeout S] [--max-position-sigma M] [--leg-spread M]\n"
+      "        [--leg-spread-lateral M] [--leg-gate CHI2] [--occluded-coast S] [--occluded-delete-timeout S]\n"
+      "        [--free-space-delete N] [--visibility-radius M] [--min-init-distance M] [--initial-velocity-sigma V]\n"
+      "        [--pair-distance M]\n"
       "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--robot follow|route]\n"
       "             [--keep-spurs] [--follow-distance M] [--fov-deg 360] [--range-max 20] [--mask tangents|inside] [--model FILE]\n"
       "             [--heading-drift R] [--scale-error E] [--max-duration S] [--json]");
