@@ -124,6 +124,9 @@ class PeopleTracker : public cairn::Node {
       throw std::invalid_argument("parameter 'tracker.association' must be gnn or jpda, got '" + assoc + "'");
     }
     tp.process_noise = declare_parameter<double>("tracker.process_noise", tp.process_noise, D{"m^2/s^3, CV white-noise acceleration density", 1e-6, 100.0, true});
+    tp.maneuver_process_noise = declare_parameter<double>("tracker.maneuver_process_noise", tp.maneuver_process_noise, D{"m^2/s^3, IMM manoeuvre mode (0 = one walking mode)", 0.0, 1000.0, true});
+    tp.maneuver_rate = declare_parameter<double>("tracker.maneuver_rate", tp.maneuver_rate, D{"1/s, IMM walking -> manoeuvre switching rate", 0.0, 100.0, true});
+    tp.maneuver_end_rate = declare_parameter<double>("tracker.maneuver_end_rate", tp.maneuver_end_rate, D{"1/s, IMM manoeuvre -> walking switching rate", 0.0, 100.0, true});
     tp.initial_velocity_sigma = declare_parameter<double>("tracker.initial_velocity_sigma", tp.initial_velocity_sigma, D{"m/s, velocity std of a new track", 1e-3, 10.0, true});
     tp.gate_chi2 = declare_parameter<double>("tracker.gate_chi2", tp.gate_chi2, D{"chi-square gate (2 dof)", 0.1, 100.0, true});
     tp.confirm_hits = static_cast<int>(declare_parameter<int64_t>("tracker.confirm_hits", tp.confirm_hits, D{"associated scans until confirmed", 1.0, 100.0, true}));

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <random>
 #include <sstream>
 
 #include "cairn/people_tracking/classifier.hpp"
@@ -131,6 +132,8 @@ BenchResult runBench(const BenchParams& params) {
   if (params.world != "auto")
     throw InputError("world '" + params.world + "' is not supported yet (only --world auto; world files come with the simulator component)");
   if (!(params.scan_rate > 0.0)) throw InputError("scan rate must be positive");
+  if (params.oracle_detections && !(params.oracle_sigma > 0.0 && params.oracle_sigma < 10.0))
+    throw InputError("oracle sigma must be in (0, 10) m");
   const TrajectorySet traj = loadTrajectories(params.trajectories);
   const std::string model_path =
       params.model.empty() ? defaultModelPath(ClassifierKind::kAdaBoost, "arras14") : params.model;
@@ -157,6 +160,7 @@ BenchResult runBench(const BenchParams& params) {
   NearestNeighbourTracker baseline;
   ClearMot mot(params.match_threshold), mot_base(params.match_threshold);
   std::mt19937_64 rng(mix(params.seed, 1));
+  std::mt19937_64 oracle_rng(mix(params.seed, 2));  // separate stream: the scans stay those of a normal run
 
   // Per-person body parameters, seeded by (seed, id).
   std::map<int, WalkerState> walkers;
@@ -239,8 +243,23 @@ BenchResult runBench(const BenchParams& params) {
     const auto legs = detector.detectLegs(sim.scan);
     const auto dets = pairLegs(legs, params.detector);
     const auto c1 = Clock::now();
-    if (params.track_aware_pairing) tracker.updateLegs(t, legs, pose, params.detector, &sim.scan);
-    else tracker.update(t, dets, pose);
+    if (params.oracle_detections) {
+      std::vector<PersonDetection> truth;
+      std::normal_distribution<double> noise(0.0, params.oracle_sigma);
+      for (const MotObject& g : gt) {
+        PersonDetection d;
+        d.position = g.p + Eigen::Vector2d(noise(oracle_rng), noise(oracle_rng));
+        d.covariance = params.oracle_sigma * params.oracle_sigma * Eigen::Matrix2d::Identity();
+        d.confidence = 1.0;
+        d.legs = 2;
+        truth.push_back(d);
+      }
+      tracker.updateInFrame(t, truth);
+    } else if (params.track_aware_pairing) {
+      tracker.updateLegs(t, legs, pose, params.detector, &sim.scan);
+    } else {
+      tracker.update(t, dets, pose);
+    }
     const auto c2 = Clock::now();
     std::vector<PersonDetection> dets_frame = dets;
     for (auto& d : dets_frame) d.position = pose.transform(d.position);

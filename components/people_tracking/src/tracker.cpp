@@ -65,9 +65,7 @@ struct Innovation {
 };
 // Constant-velocity prediction with continuous white-noise acceleration (spectral density q):
 // Q = q [dt^3/3 I, dt^2/2 I; dt^2/2 I, dt I].
-void predictTrack(Track& t, double stamp, double q) {
-  const double dt = stamp - t.stamp;
-  if (dt <= 0.0) return;
+void predictCv(Eigen::Vector4d& x, Eigen::Matrix4d& P, double dt, double q) {
   Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
   F(0, 2) = F(1, 3) = dt;
   Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
@@ -75,9 +73,80 @@ void predictTrack(Track& t, double stamp, double q) {
   Q(0, 0) = Q(1, 1) = a;
   Q(0, 2) = Q(2, 0) = Q(1, 3) = Q(3, 1) = b;
   Q(2, 2) = Q(3, 3) = c;
-  t.state = F * t.state;
-  t.covariance = F * t.covariance * F.transpose() + Q;
+  x = F * x;
+  P = F * P * F.transpose() + Q;
+}
+
+bool immOn(const TrackerParams& p) { return p.maneuver_process_noise > 0.0; }
+
+// The track's state and covariance as the moment-matched mixture of its modes.
+void combineModes(Track& t, int modes) {
+  if (modes == 1) {
+    t.state = t.mode_state[0];
+    t.covariance = t.mode_covariance[0];
+    return;
+  }
+  t.state = t.mode_probability[0] * t.mode_state[0] + t.mode_probability[1] * t.mode_state[1];
+  t.covariance.setZero();
+  for (int k = 0; k < 2; ++k) {
+    const Eigen::Vector4d dx = t.mode_state[k] - t.state;
+    t.covariance += t.mode_probability[k] * (t.mode_covariance[k] + dx * dx.transpose());
+  }
+}
+
+// Prediction to `stamp`: one constant-velocity filter, or the IMM cycle (mode mixing by the Markov chain, then
+// each mode predicted with its own process noise).
+void predictTrack(Track& t, double stamp, const TrackerParams& p) {
+  const double dt = stamp - t.stamp;
+  if (dt <= 0.0) return;
   t.stamp = stamp;
+  if (!immOn(p)) {
+    predictCv(t.mode_state[0], t.mode_covariance[0], dt, p.process_noise);
+    combineModes(t, 1);
+    return;
+  }
+  Eigen::Matrix2d pi;  // pi(i, j): probability of mode i -> mode j within dt
+  const double a = 1.0 - std::exp(-p.maneuver_rate * dt), b = 1.0 - std::exp(-p.maneuver_end_rate * dt);
+  pi << 1.0 - a, a, b, 1.0 - b;
+  const Eigen::Vector2d c = pi.transpose() * t.mode_probability;  // predicted mode probabilities
+  std::array<Eigen::Vector4d, 2> x0;
+  std::array<Eigen::Matrix4d, 2> P0;
+  for (int j = 0; j < 2; ++j) {
+    x0[j].setZero();
+    P0[j].setZero();
+    if (!(c[j] > 0.0)) {
+      x0[j] = t.mode_state[j];
+      P0[j] = t.mode_covariance[j];
+      continue;
+    }
+    for (int i = 0; i < 2; ++i) x0[j] += pi(i, j) * t.mode_probability[i] / c[j] * t.mode_state[i];
+    for (int i = 0; i < 2; ++i) {
+      const Eigen::Vector4d dx = t.mode_state[i] - x0[j];
+      P0[j] += pi(i, j) * t.mode_probability[i] / c[j] * (t.mode_covariance[i] + dx * dx.transpose());
+    }
+  }
+  const double q[2] = {p.process_noise, p.maneuver_process_noise};
+  for (int j = 0; j < 2; ++j) {
+    t.mode_state[j] = x0[j];
+    t.mode_covariance[j] = P0[j];
+    predictCv(t.mode_state[j], t.mode_covariance[j], dt, q[j]);
+  }
+  t.mode_probability = c / c.sum();
+  combineModes(t, 2);
+}
+
+// Kalman update of one mode with a position measurement (Joseph form); returns the measurement's log-likelihood.
+double updateMode(Eigen::Vector4d& x, Eigen::Matrix4d& P, const PersonDetection& d) {
+  const Eigen::Vector2d nu = d.position - x.head<2>();
+  const Eigen::Matrix2d S = P.topLeftCorner<2, 2>() + d.covariance;
+  const Eigen::Matrix2d Si = S.inverse();
+  const Eigen::Matrix<double, 4, 2> K = P.leftCols<2>() * Si;
+  x += K * nu;
+  Eigen::Matrix<double, 2, 4> H = Eigen::Matrix<double, 2, 4>::Zero();
+  H(0, 0) = H(1, 1) = 1.0;
+  const Eigen::Matrix4d IKH = Eigen::Matrix4d::Identity() - K * H;
+  P = IKH * P * IKH.transpose() + K * d.covariance * K.transpose();
+  return -0.5 * nu.dot(Si * nu) - 0.5 * std::log(S.determinant()) - std::log(2.0 * M_PI);
 }
 
 Innovation innovation(const Track& t, const PersonDetection& d) {
@@ -364,7 +433,7 @@ void PeopleTracker::splitGroups(const std::vector<LegDetection>& legs, const Det
 }
 
 void PeopleTracker::predict(double stamp) {
-  for (Track& t : tracks_) predictTrack(t, stamp, params_.process_noise);
+  for (Track& t : tracks_) predictTrack(t, stamp, params_);
 }
 
 Eigen::Matrix2d PeopleTracker::legSpread(const Track& t) const {
@@ -386,8 +455,14 @@ void PeopleTracker::reidentify(std::size_t new_track) {
   std::size_t best_k = deleted_.size();
   for (std::size_t k = 0; k < deleted_.size(); ++k) {
     if (last_stamp_ - deleted_[k].deleted > params_.reid_window) continue;
+    // The deleted track's constant-velocity prediction with the walking process noise only (the manoeuvre
+    // mode's covariance grows so fast over seconds that its gate would take anyone).
     Track old = deleted_[k].track;
-    predictTrack(old, last_stamp_, params_.process_noise);
+    old.mode_state[0] = old.state;
+    old.mode_covariance[0] = old.covariance;
+    TrackerParams walking = params_;
+    walking.maneuver_process_noise = 0.0;
+    predictTrack(old, last_stamp_, walking);
     const Eigen::Vector2d nu = n.position() - old.position();
     const Eigen::Matrix2d S = old.positionCovariance() + n.positionCovariance();
     const double d2 = nu.dot(S.ldlt().solve(nu));
@@ -403,13 +478,18 @@ void PeopleTracker::reidentify(std::size_t new_track) {
 }
 
 void PeopleTracker::applyUpdate(Track& t, const PersonDetection& d) {
-  const Innovation in = innovation(t, d);
-  const Eigen::Matrix<double, 4, 2> K = t.covariance.leftCols<2>() * in.S.inverse();
-  t.state += K * in.nu;
-  Eigen::Matrix<double, 2, 4> H = Eigen::Matrix<double, 2, 4>::Zero();
-  H(0, 0) = H(1, 1) = 1.0;
-  const Eigen::Matrix4d IKH = Eigen::Matrix4d::Identity() - K * H;
-  t.covariance = IKH * t.covariance * IKH.transpose() + K * d.covariance * K.transpose();  // Joseph form
+  if (!immOn(params_)) {
+    updateMode(t.mode_state[0], t.mode_covariance[0], d);
+    combineModes(t, 1);
+  } else {
+    // Mode probabilities follow the modes' measurement likelihoods (in log space: far detections underflow).
+    double ll[2];
+    for (int k = 0; k < 2; ++k) ll[k] = updateMode(t.mode_state[k], t.mode_covariance[k], d);
+    const double m = std::max(ll[0], ll[1]);
+    const Eigen::Vector2d w(t.mode_probability[0] * std::exp(ll[0] - m), t.mode_probability[1] * std::exp(ll[1] - m));
+    if (w.sum() > 0.0) t.mode_probability = w / w.sum();
+    combineModes(t, 2);
+  }
   t.last_update = t.stamp;
   ++t.hits;
   if (d.legs == 2 && d.leg_separation > 0.0)
@@ -549,6 +629,10 @@ void PeopleTracker::associateJpda(const std::vector<PersonDetection>& dets, std:
       const Eigen::Matrix4d Pc = t.covariance - K * S * K.transpose();
       t.state += K * nu;
       t.covariance = b0 * t.covariance + (1.0 - b0) * Pc + K * (spread - nu * nu.transpose()) * K.transpose();
+      // JPDA updates the mixture; with IMM both modes restart from it (an approximation: IMM-JPDA proper would
+      // update every mode with its own innovations). Mode probabilities are kept.
+      t.mode_state.fill(t.state);
+      t.mode_covariance.fill(t.covariance);
       t.last_update = t.stamp;
       ++t.hits;
       if (d.legs == 2 && d.leg_separation > 0.0)
@@ -579,6 +663,12 @@ void PeopleTracker::initiate(const std::vector<PersonDetection>& dets, const std
     t.covariance.topLeftCorner<2, 2>() = dets[j].covariance;
     const double v2 = params_.initial_velocity_sigma * params_.initial_velocity_sigma;
     t.covariance(2, 2) = t.covariance(3, 3) = v2;
+    t.mode_state.fill(t.state);
+    t.mode_covariance.fill(t.covariance);
+    // A new track starts at the Markov chain's stationary mode probabilities.
+    const double rate_sum = params_.maneuver_rate + params_.maneuver_end_rate;
+    const double p1 = immOn(params_) && rate_sum > 0.0 ? params_.maneuver_rate / rate_sum : 0.0;
+    t.mode_probability = Eigen::Vector2d(1.0 - p1, p1);
     t.stamp = t.first_stamp = t.last_update = last_stamp_;
     t.hits = 1;
     t.confirmed = params_.confirm_hits <= 1;

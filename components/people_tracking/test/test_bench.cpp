@@ -53,6 +53,19 @@ TEST(Bench, SameSeedSameResultAndDumpFiles) {
   std::filesystem::remove_all(p.dump_dir);
 }
 
+// The diagnostic mode feeds the tracker the counted people's true positions (plus 5 cm noise): the detector's
+// misses and leg-pairing errors disappear, so it scores the tracking core alone.
+TEST(Bench, OracleDetectionsScoreTheTrackerAlone) {
+  BenchParams p = excerpt();
+  const BenchResult legs = runBench(p);
+  p.oracle_detections = true;
+  const BenchResult oracle = runBench(p);
+  EXPECT_EQ(oracle.cairn.mot.gt, legs.cairn.mot.gt);  // the same scans and the same counted people
+  EXPECT_LT(oracle.cairn.mot.fn, legs.cairn.mot.fn);
+  EXPECT_GT(oracle.cairn.mot.mota(), legs.cairn.mot.mota());
+  EXPECT_LT(oracle.cairn.mot.motp(), 0.08);  // 5 cm noise per axis: mean error about 6 cm
+}
+
 TEST(Bench, BadInputs) {
   BenchParams p = excerpt();
   p.world = "apartment";

@@ -35,9 +35,14 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--association") p.tracker.association = associationFromString(value());
     else if (a == "--dump") p.dump_dir = value();
     else if (a == "--process-noise") p.tracker.process_noise = number(value());
+    else if (a == "--maneuver-noise") p.tracker.maneuver_process_noise = number(value());
+    else if (a == "--maneuver-rate") p.tracker.maneuver_rate = number(value());
+    else if (a == "--maneuver-end-rate") p.tracker.maneuver_end_rate = number(value());
     else if (a == "--delete-timeout") p.tracker.delete_timeout = number(value());
     else if (a == "--max-position-sigma") p.tracker.max_position_sigma = number(value());
     else if (a == "--confirm-hits") p.tracker.confirm_hits = static_cast<int>(number(value()));
+    else if (a == "--oracle-detections") p.oracle_detections = true;
+    else if (a == "--oracle-sigma") p.oracle_sigma = number(value());
     else if (a == "--pairing") {
       const std::string v = value();
       if (v != "tracks" && v != "detector") throw InputError("--pairing expects tracks|detector, got '" + v + "'");
@@ -59,6 +64,8 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--track-leg-confidence") p.detector.track_leg_confidence = number(value());
     else if (a == "--min-leg-confidence") p.detector.min_leg_confidence = number(value());
     else if (a == "--pair-distance") p.detector.max_leg_pair_distance = number(value());
+    else if (a == "--sigma-pair") p.detector.sigma_pair = number(value());
+    else if (a == "--sigma-single") p.detector.sigma_single = number(value());
     else throw InputError("unknown bench option '" + a + "'");
   }
   if (p.trajectories.empty()) throw InputError("bench needs --trajectories FILE");

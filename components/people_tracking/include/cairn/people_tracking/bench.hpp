@@ -23,6 +23,10 @@ struct BenchParams {
   std::string model;           // classifier file; empty = shipped leg_adaboost_arras14.yml
   TrackerParams tracker{};
   bool track_aware_pairing = true;  // legs paired with the tracks (updateLegs); false: detector's pairing (update)
+  // Diagnostic: the tracker gets the counted people's true positions plus oracle_sigma noise (update) instead of
+  // the detector's output, which separates tracking errors from detection and leg-pairing errors.
+  bool oracle_detections = false;
+  double oracle_sigma = 0.05;  // m
   DetectorParams detector{};
   LaserModel laser{};          // runBench sets a 360 deg scan unless laser_fov_set
   bool laser_fov_set = false;

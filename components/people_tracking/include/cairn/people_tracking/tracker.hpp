@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,14 @@ struct TrackerParams {
   // about +-0.3 m fore and aft of the body (0.21 m std), so alone it says little about the body along the walk.
   // 0 disables. ETH/hotel/zara01 x static/circle x seeds 1-3: IDSW 628 -> 554 (0.3), 563 (0.2), 556 (0.45).
   double single_leg_stride_sigma = 0.3;
+  // Interacting multiple models (IMM, Blom & Bar-Shalom 1988): every track runs two constant-velocity filters,
+  // mode 0 with process_noise (steady walking) and mode 1 with maneuver_process_noise (starting, stopping,
+  // turning), mixed by a Markov chain with the given switching rates (per second; the per-scan probability is
+  // 1 - exp(-rate dt)). Gating and the published state use the moment-matched mixture, so a person who turns or
+  // speeds up keeps the track instead of leaving a gate sized for straight walking. 0 = one mode (plain EKF).
+  double maneuver_process_noise = 0.0;  // m^2/s^3
+  double maneuver_rate = 0.5;           // 1/s, walking -> maneuver
+  double maneuver_end_rate = 2.0;       // 1/s, maneuver -> walking
 };
 
 // Why a track got no leg in the last scan (updateLegs with a scan; kUnknown without one).
@@ -81,6 +90,11 @@ struct Track {
   int id = 0;
   Eigen::Vector4d state = Eigen::Vector4d::Zero();           // px py vx vy (tracking frame)
   Eigen::Matrix4d covariance = Eigen::Matrix4d::Identity();  // of state
+  // IMM modes (TrackerParams::maneuver_process_noise > 0): per-mode state and covariance and the mode
+  // probabilities; state/covariance above are their moment-matched mixture. With one mode only [0] is used.
+  std::array<Eigen::Vector4d, 2> mode_state{Eigen::Vector4d::Zero(), Eigen::Vector4d::Zero()};
+  std::array<Eigen::Matrix4d, 2> mode_covariance{Eigen::Matrix4d::Identity(), Eigen::Matrix4d::Identity()};
+  Eigen::Vector2d mode_probability{1.0, 0.0};
   double stamp = 0.0;        // time of the state
   double first_stamp = 0.0;  // initiation time
   double last_update = 0.0;  // last associated detection
