@@ -175,7 +175,7 @@ BenchResult runBench(const BenchParams& params) {
     walkers[id] = w;
   }
 
-  std::ofstream gt_csv, tr_csv, leg_csv, all_csv, match_csv;
+  std::ofstream gt_csv, tr_csv, leg_csv, all_csv, match_csv, dc_csv;
   if (!params.dump_dir.empty()) {
     std::filesystem::create_directories(params.dump_dir);
     gt_csv.open(params.dump_dir + "/groundtruth.csv");
@@ -183,12 +183,14 @@ BenchResult runBench(const BenchParams& params) {
     leg_csv.open(params.dump_dir + "/legs.csv");
     all_csv.open(params.dump_dir + "/tracker_state.csv");
     match_csv.open(params.dump_dir + "/matches.csv");
-    if (!gt_csv || !tr_csv || !leg_csv || !all_csv || !match_csv) throw InputError("cannot write into dump directory " + params.dump_dir);
+    dc_csv.open(params.dump_dir + "/dontcare.csv");
+    if (!gt_csv || !tr_csv || !leg_csv || !all_csv || !match_csv || !dc_csv) throw InputError("cannot write into dump directory " + params.dump_dir);
     gt_csv << "t,id,x,y\n";
     tr_csv << "t,id,x,y\n";
     leg_csv << "t,x,y,confidence\n";
     all_csv << "t,id,x,y,vx,vy,confirmed,coast_s,visibility\n";
     match_csv << "t,person,track,switched_from\n";
+    dc_csv << "t,x,y\n";
   }
 
   BenchResult result;
@@ -281,6 +283,7 @@ BenchResult runBench(const BenchParams& params) {
     mot_base.addFrame(gt, hyp_base, dont_care);
     if (gt_csv.is_open()) {
       for (const auto& g : gt) gt_csv << t << ',' << g.id << ',' << g.p.x() << ',' << g.p.y() << '\n';
+      for (const auto& d : dont_care) dc_csv << t << ',' << d.x() << ',' << d.y() << '\n';
       for (const auto& h : hyp) tr_csv << t << ',' << h.id << ',' << h.p.x() << ',' << h.p.y() << '\n';
       for (const auto& c : mot.lastFrame()) match_csv << t << ',' << c.gt << ',' << c.hyp << ',' << c.switched_from << '\n';
       for (const Track& tr : tracker.tracks())

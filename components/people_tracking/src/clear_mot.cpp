@@ -4,8 +4,33 @@
 
 namespace cairn::people_tracking {
 
-void ClearMot::addFrame(const std::vector<MotObject>& gt, const std::vector<MotObject>& hyp,
+void ClearMot::addFrame(const std::vector<MotObject>& gt, const std::vector<MotObject>& all_hyp,
                         const std::vector<Eigen::Vector2d>& dont_care) {
+  constexpr double kForbidden = 1e9;
+  // 0. Don't-care objects (MOTChallenge's distractor preprocessing): hypotheses and all objects, counted or
+  // not, are matched optimally; hypotheses matched to a don't-care object are removed from the frame. A track
+  // on a person who does not count can then not be matched to a counted neighbour.
+  std::vector<MotObject> hyp;
+  if (dont_care.empty()) {
+    hyp = all_hyp;
+  } else if (!all_hyp.empty()) {
+    const std::size_t rows = gt.size() + dont_care.size();
+    Eigen::MatrixXd cost(static_cast<long>(rows), static_cast<long>(all_hyp.size()));
+    for (std::size_t r = 0; r < rows; ++r)
+      for (std::size_t c = 0; c < all_hyp.size(); ++c) {
+        const Eigen::Vector2d& o = r < gt.size() ? gt[r].p : dont_care[r - gt.size()];
+        const double d = (o - all_hyp[c].p).norm();
+        cost(static_cast<long>(r), static_cast<long>(c)) = d <= threshold_ ? d : kForbidden;
+      }
+    const std::vector<int> match = solveAssignment(cost, kForbidden);
+    std::vector<bool> drop(all_hyp.size(), false);
+    for (std::size_t r = gt.size(); r < rows; ++r)
+      if (match[r] >= 0) drop[static_cast<std::size_t>(match[r])] = true;
+    for (std::size_t c = 0; c < all_hyp.size(); ++c) {
+      if (drop[c]) ++m_.ignored;
+      else hyp.push_back(all_hyp[c]);
+    }
+  }
   ++m_.frames;
   m_.gt += gt.size();
   for (const auto& g : gt) seen_gt_[g.id] = true;
@@ -29,7 +54,6 @@ void ClearMot::addFrame(const std::vector<MotObject>& gt, const std::vector<MotO
   for (std::size_t j = 0; j < hyp.size(); ++j)
     if (!hyp_used[j]) cols.push_back(j);
   if (!rows.empty() && !cols.empty()) {
-    constexpr double kForbidden = 1e9;
     Eigen::MatrixXd cost(static_cast<long>(rows.size()), static_cast<long>(cols.size()));
     for (std::size_t r = 0; r < rows.size(); ++r)
       for (std::size_t c = 0; c < cols.size(); ++c) {
@@ -64,13 +88,8 @@ void ClearMot::addFrame(const std::vector<MotObject>& gt, const std::vector<MotO
     frame_.push_back({gt[i].id, h.id, switched_from[i]});
     last_match_[gt[i].id] = h.id;
   }
-  for (std::size_t j = 0; j < hyp.size(); ++j) {
-    if (hyp_used[j]) continue;
-    bool ignore = false;
-    for (const auto& d : dont_care) ignore |= (hyp[j].p - d).norm() <= threshold_;
-    if (ignore) ++m_.ignored;
-    else ++m_.fp;
-  }
+  for (std::size_t j = 0; j < hyp.size(); ++j)
+    if (!hyp_used[j]) ++m_.fp;
 }
 
 MotMetrics ClearMot::metrics() const {

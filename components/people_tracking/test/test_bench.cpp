@@ -50,6 +50,9 @@ TEST(Bench, SameSeedSameResultAndDumpFiles) {
   EXPECT_EQ(line, "t,id,x,y");
   while (std::getline(gt, line)) ++gt_rows;
   EXPECT_EQ(gt_rows, a.cairn.mot.gt);
+  std::ifstream dc(p.dump_dir + "/dontcare.csv");
+  std::getline(dc, line);
+  EXPECT_EQ(line, "t,x,y");
   std::filesystem::remove_all(p.dump_dir);
 }
 

@@ -63,6 +63,26 @@ TEST(ClearMot, KeepsCorrespondenceOverACloserHypothesis) {
   EXPECT_NEAR(m.motp(), 0.2, 1e-12);
 }
 
+TEST(ClearMot, HypothesisOnADontCarePersonIsNotMatchedToACountedNeighbour) {
+  // Person 1 counts; a second person 0.6 m away does not (out of range or sight) and is tracked by 20, which is
+  // also within 0.5 m of person 1. As in MOTChallenge's distractor preprocessing, 20 goes to the don't-care
+  // person (ignored), so person 1 is a miss until its own track 10 appears, and then no ID switch.
+  ClearMot mot(0.5);
+  mot.addFrame({{1, {0, 0}}}, {{20, {0.4, 0}}}, {{0.6, 0}});
+  mot.addFrame({{1, {0, 0}}}, {{20, {0.4, 0}}, {10, {0.05, 0}}}, {{0.6, 0}});
+  const MotMetrics m = mot.metrics();
+  EXPECT_EQ(m.fn, 1u);
+  EXPECT_EQ(m.matches, 1u);
+  EXPECT_EQ(m.ignored, 2u);
+  EXPECT_EQ(m.fp, 0u);
+  EXPECT_EQ(m.id_switches, 0u);
+  // Two hypotheses on one don't-care person: one is ignored, the other is a false positive.
+  ClearMot two(0.5);
+  two.addFrame({}, {{30, {5, 5}}, {31, {5.1, 5}}}, {{5.05, 5}});
+  EXPECT_EQ(two.metrics().ignored, 1u);
+  EXPECT_EQ(two.metrics().fp, 1u);
+}
+
 namespace {
 std::string data(const std::string& f) { return std::string(CAIRN_SOURCE_ROOT) + "/test/data/people/" + f; }
 }  // namespace

@@ -178,6 +178,7 @@ int train(const Args& a) {
   // --data only: the CSV files; --data and --scenes: both (a mix); neither: generated scenes.
   d.scenes = static_cast<int>(toLong(a, "scenes", a.has("data") ? 0 : 1500));
   d.seed = static_cast<std::uint64_t>(toLong(a, "seed", 1));
+  d.segmentation.min_points = static_cast<int>(toLong(a, "min-points", d.segmentation.min_points));
   const std::string out = a.get("out", "");
   if (out.empty()) fail("train needs --out FILE");
   auto samples = generateLabelledClusters(d);

@@ -64,6 +64,7 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--track-leg-confidence") p.detector.track_leg_confidence = number(value());
     else if (a == "--min-leg-confidence") p.detector.min_leg_confidence = number(value());
     else if (a == "--pair-distance") p.detector.max_leg_pair_distance = number(value());
+    else if (a == "--min-points") p.detector.segmentation.min_points = static_cast<int>(number(value()));
     else if (a == "--sigma-pair") p.detector.sigma_pair = number(value());
     else if (a == "--sigma-single") p.detector.sigma_single = number(value());
     else throw InputError("unknown bench option '" + a + "'");

@@ -33,8 +33,9 @@ struct BenchParams {
   double sensor_range = 8.0;   // m, people farther away do not count (Yuan's 8 m field)
   int min_visible_beams = 3;   // line of sight: at least this many beams hit the person's legs
   double match_threshold = 0.5;
-  std::string dump_dir;        // if set: groundtruth.csv and tracks.csv (t,id,x,y); matches.csv (the scorer's
-                                // correspondences: t,person,track,switched_from); legs.csv, tracker_state.csv (debug)
+  std::string dump_dir;        // if set: groundtruth.csv and tracks.csv (t,id,x,y); dontcare.csv (t,x,y: people
+                                // present but not counted); matches.csv (the scorer's correspondences:
+                                // t,person,track,switched_from); legs.csv, tracker_state.csv (debug)
 };
 
 struct BenchRun {

@@ -32,8 +32,10 @@ struct MotCorrespondence {
 class ClearMot {
  public:
   explicit ClearMot(double threshold = 0.5) : threshold_(threshold) {}
-  // dont_care: positions of people that exist but do not count (out of line of sight); unmatched hypotheses
-  // within the threshold of one are neither FP nor matches.
+  // dont_care: positions of people that exist but do not count (out of range or line of sight). As in the
+  // MOTChallenge evaluation's distractor preprocessing, hypotheses are first matched optimally (Hungarian,
+  // threshold) to all objects, counted and don't-care; those matched to a don't-care object are removed from
+  // the frame (counted as `ignored`, neither FP nor matches) before the CLEAR MOT matching.
   void addFrame(const std::vector<MotObject>& gt, const std::vector<MotObject>& hyp,
                 const std::vector<Eigen::Vector2d>& dont_care = {});
   [[nodiscard]] MotMetrics metrics() const;
