@@ -175,7 +175,7 @@ BenchResult runBench(const BenchParams& params) {
     walkers[id] = w;
   }
 
-  std::ofstream gt_csv, tr_csv, leg_csv, all_csv, match_csv, dc_csv;
+  std::ofstream gt_csv, tr_csv, leg_csv, all_csv, match_csv, dc_csv, robot_csv;
   if (!params.dump_dir.empty()) {
     std::filesystem::create_directories(params.dump_dir);
     gt_csv.open(params.dump_dir + "/groundtruth.csv");
@@ -184,13 +184,15 @@ BenchResult runBench(const BenchParams& params) {
     all_csv.open(params.dump_dir + "/tracker_state.csv");
     match_csv.open(params.dump_dir + "/matches.csv");
     dc_csv.open(params.dump_dir + "/dontcare.csv");
-    if (!gt_csv || !tr_csv || !leg_csv || !all_csv || !match_csv || !dc_csv) throw InputError("cannot write into dump directory " + params.dump_dir);
+    robot_csv.open(params.dump_dir + "/robot.csv");
+    if (!gt_csv || !tr_csv || !leg_csv || !all_csv || !match_csv || !dc_csv || !robot_csv) throw InputError("cannot write into dump directory " + params.dump_dir);
     gt_csv << "t,id,x,y\n";
     tr_csv << "t,id,x,y\n";
     leg_csv << "t,x,y,confidence\n";
     all_csv << "t,id,x,y,vx,vy,confirmed,coast_s,visibility\n";
     match_csv << "t,person,track,switched_from\n";
     dc_csv << "t,x,y\n";
+    robot_csv << "t,x,y,theta\n";
   }
 
   BenchResult result;
@@ -284,6 +286,7 @@ BenchResult runBench(const BenchParams& params) {
     if (gt_csv.is_open()) {
       for (const auto& g : gt) gt_csv << t << ',' << g.id << ',' << g.p.x() << ',' << g.p.y() << '\n';
       for (const auto& d : dont_care) dc_csv << t << ',' << d.x() << ',' << d.y() << '\n';
+      robot_csv << t << ',' << pose.x << ',' << pose.y << ',' << pose.theta << '\n';
       for (const auto& h : hyp) tr_csv << t << ',' << h.id << ',' << h.p.x() << ',' << h.p.y() << '\n';
       for (const auto& c : mot.lastFrame()) match_csv << t << ',' << c.gt << ',' << c.hyp << ',' << c.switched_from << '\n';
       for (const Track& tr : tracker.tracks())

@@ -5,7 +5,9 @@
 
 1. A scripted dump with two people walking side by side 0.8 m apart: at t = 0.5 s person 1's track moves onto
    person 2 and person 1 gets a new track, person 2's own track is deleted. Two switches with known classes.
-2. The switches a real `cairn people bench --dump` lists in matches.csv are the bench's id_switches.
+2. --by-range bands on a scripted dump (two people at 1 m and 5 m, legs and one switch known).
+3. The switches a real `cairn people bench --dump` lists in matches.csv are the bench's id_switches, and the
+   dump has what --by-range needs.
 """
 import json
 import os
@@ -42,6 +44,24 @@ def scripted(d):
     write(d + "/tracker_state.csv", "t,id,x,y,vx,vy,confirmed,coast_s,visibility", state)
 
 
+def range_dump(d):
+    """Two people at 1 m and 5 m from a sensor at the origin, 4 scans; person 2 switches once (at 0.3 s)."""
+    gt, legs, robot, matches = [], [], [], []
+    for k in range(4):
+        t = round(0.1 * k, 1)
+        gt += [(t, 1, 1.0, 0.0), (t, 2, 5.0, 0.0)]
+        robot.append((t, 0.0, 0.0, 0.0))
+        legs += [(t, 1.1, 0.0, 0.9), (t, 0.9, 0.0, 0.7)]  # person 1: two strong legs
+        if k % 2 == 0:
+            legs.append((t, 5.1, 0.0, 0.3))  # person 2: a weak leg every other scan
+        matches += [(t, 1, 10, -1), (t, 2, 20 if k < 3 else 21, 20 if k == 3 else -1)]
+    write(d + "/groundtruth.csv", "t,id,x,y", gt)
+    write(d + "/legs.csv", "t,x,y,confidence", legs)
+    write(d + "/robot.csv", "t,x,y,theta", robot)
+    write(d + "/matches.csv", "t,person,track,switched_from", matches)
+    write(d + "/tracker_state.csv", "t,id,x,y,vx,vy,confirmed,coast_s,visibility", [])
+
+
 def main():
     exe, traj = sys.argv[1], sys.argv[2]
     failures = []
@@ -63,12 +83,21 @@ def main():
             check(all(s["early"] and s["young"] and s["group"] for s in sw), f"scripted flags: {sw}")
             check(abs(a["nearest"] - 0.8) < 1e-9, f"scripted nearest: {a['nearest']}")
     with tempfile.TemporaryDirectory() as d:
+        range_dump(d)
+        sw = switch_analysis.analyse(d)
+        rows = switch_analysis.by_range(d, sw)
+        # bands 0-2, 2-4, 4-6, 6-8 m: [person-scans, switches, leg >= 0.5, two legs >= 0.5, leg >= 0.2]
+        check(rows == [[4, 0, 4, 4, 4], [0, 0, 0, 0, 0], [4, 1, 0, 0, 2], [0, 0, 0, 0, 0]], f"by_range: {rows}")
+        check(len(sw) == 1 and abs(sw[0]["gap"] - 0.1) < 1e-9, f"gap of a switch after a match: {sw}")
+    with tempfile.TemporaryDirectory() as d:
         out = subprocess.run([exe, "bench", "--world", "auto", "--trajectories", traj, "--seed", "1", "--json",
                               "--dump", d], check=True, capture_output=True, text=True).stdout
         bench = json.loads(out)["cairn"]["id_switches"]
         mine = len(switch_analysis.analyse(d))
         check(bench > 0, "bench excerpt has no switches: the comparison would be vacuous")
         check(mine == bench, f"matches.csv lists {mine} switches, the bench counted {bench}")
+        rows = switch_analysis.by_range(d, switch_analysis.analyse(d))
+        check(sum(r[1] for r in rows) == bench, f"by_range assigns {rows} switches, the bench counted {bench}")
     for f in failures:
         print("FAIL:", f)
     print("ok" if not failures else f"{len(failures)} failure(s)")

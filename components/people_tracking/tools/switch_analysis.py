@@ -12,7 +12,11 @@ with the switched-from track, so the switches are exactly the bench's id_switche
   person: switches within 3 s of the person's first counted scan ("early");
   old track: confirmed < 3 s before the switch ("young"), and whether another person was within 1 m when it was
     confirmed ("born in a group").
+  gap: how long the person had been unmatched (a miss) before the switch (0.1 s = matched in the previous scan).
 --list prints one line per switch (t, person, A, B, classes, nearest other person in m).
+--by-range (needs robot.csv and legs.csv in the dump) prints, per band of distance from the sensor, the counted
+  person-scans, the switches and switches per 10 000 person-scans, and how often a counted person has a leg
+  detection within 0.4 m: any leg scored >= 0.5, two such legs, any leg >= 0.2 (the tracker's weak-leg threshold).
 """
 import collections
 import csv
@@ -33,7 +37,7 @@ def by_time(path):
 def analyse(d):
     gt, mt, st = by_time(d + "/groundtruth.csv"), by_time(d + "/matches.csv"), by_time(d + "/tracker_state.csv")
     on_person = collections.defaultdict(set)  # track id -> persons it was matched to so far
-    first_state, confirmed_at, first_counted = {}, {}, {}
+    first_state, confirmed_at, first_counted, last_matched = {}, {}, {}, {}
     out = []
     for t in sorted(set(gt) | set(mt) | set(st)):
         G = [(int(r["id"]), float(r["x"]), float(r["y"])) for r in gt.get(t, [])]
@@ -65,10 +69,40 @@ def analyse(d):
             conf_t, group = confirmed_at.get(a, (t, False))
             out.append({"t": t, "person": g, "old": a, "new_id": h, "old_class": old, "new_class": new,
                         "early": t - first_counted[g] < 3.0, "young": t - conf_t < 3.0, "group": group,
-                        "nearest": near})
+                        "nearest": near, "gap": t - last_matched.get(g, t)})
         for g, h in match.items():
             on_person[h].add(g)
+            last_matched[g] = t
     return out
+
+
+BANDS = (2.0, 4.0, 6.0, 8.0)  # m, upper edges of the distance bands of --by-range (the bench counts up to 8 m)
+LEG_RADIUS = 0.4  # m, a leg detection this close to a person counts as that person's
+
+
+def by_range(d, switches):
+    """Per distance band: [person-scans, switches, scans with a leg >= 0.5, with two, with a leg >= 0.2]."""
+    robot = {t: (float(r[0]["x"]), float(r[0]["y"])) for t, r in by_time(d + "/robot.csv").items()}
+    legs = by_time(d + "/legs.csv")
+    gt = by_time(d + "/groundtruth.csv")
+    band = lambda t, x, y: next((k for k, b in enumerate(BANDS) if math.hypot(x - robot[t][0], y - robot[t][1]) <= b),
+                                len(BANDS) - 1)
+    rows = [[0, 0, 0, 0, 0] for _ in BANDS]
+    where = {}
+    for t, people in gt.items():
+        L = [(float(r["x"]), float(r["y"]), float(r["confidence"])) for r in legs.get(t, [])]
+        for r in people:
+            x, y = float(r["x"]), float(r["y"])
+            k = band(t, x, y)
+            where[(t, int(r["id"]))] = k
+            near = [c for lx, ly, c in L if math.hypot(lx - x, ly - y) < LEG_RADIUS]
+            rows[k][0] += 1
+            rows[k][2] += any(c >= 0.5 for c in near)
+            rows[k][3] += sum(c >= 0.5 for c in near) >= 2
+            rows[k][4] += any(c >= 0.2 for c in near)
+    for s in switches:
+        rows[where[(s["t"], s["person"])]][1] += 1
+    return rows
 
 
 def main():
@@ -77,9 +111,13 @@ def main():
         print(__doc__)
         return 2
     allsw = []
+    bands = [[0, 0, 0, 0, 0] for _ in BANDS]
     for d in dirs:
         try:
             sw = analyse(d)
+            if "--by-range" in sys.argv:
+                for k, row in enumerate(by_range(d, sw)):
+                    bands[k] = [a + b for a, b in zip(bands[k], row)]
         except (OSError, KeyError, ValueError) as e:
             print(f"switch_analysis: {d}: {e}", file=sys.stderr)
             return 2
@@ -97,6 +135,18 @@ def main():
     print(f"  early (< 3 s after the person was first counted): {sum(s['early'] for s in allsw)}")
     print(f"  old track young (confirmed < 3 s before): {sum(s['young'] for s in allsw)}, "
           f"of them born in a group: {sum(s['young'] and s['group'] for s in allsw)}")
+    gaps = collections.Counter("matched in the previous scan" if s["gap"] < 0.15 else "unmatched 0.2-0.5 s"
+                               if s["gap"] < 0.55 else "unmatched 0.6-1.5 s" if s["gap"] < 1.55 else
+                               "unmatched > 1.5 s" for s in allsw)
+    print("  person before the switch: " + ", ".join(f"{k} {v}" for k, v in gaps.most_common()))
+    if "--by-range" in sys.argv:
+        print("| distance | person-scans | switches | per 10k | leg >= 0.5 | two legs >= 0.5 | leg >= 0.2 |")
+        print("|---|---|---|---|---|---|---|")
+        lo = 0.0
+        for b, (n, k, one, two, weak) in zip(BANDS, bands):
+            if n:
+                print(f"| {lo:g}-{b:g} m | {n} | {k} | {1e4 * k / n:.1f} | {one / n:.2f} | {two / n:.2f} | {weak / n:.2f} |")
+            lo = b
     return 0
 
 

@@ -35,7 +35,8 @@ struct BenchParams {
   double match_threshold = 0.5;
   std::string dump_dir;        // if set: groundtruth.csv and tracks.csv (t,id,x,y); dontcare.csv (t,x,y: people
                                 // present but not counted); matches.csv (the scorer's correspondences:
-                                // t,person,track,switched_from); legs.csv, tracker_state.csv (debug)
+                                // t,person,track,switched_from); robot.csv (t,x,y,theta: the sensor pose);
+                                // legs.csv, tracker_state.csv (debug)
 };
 
 struct BenchRun {
