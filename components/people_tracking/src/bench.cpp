@@ -64,11 +64,12 @@ class NearestNeighbourTracker {
 struct RobotPath {
   enum Kind { kStatic, kCircle, kFile } kind = kStatic;
   Eigen::Vector2d center = Eigen::Vector2d::Zero();
+  double heading = 0.0;  // static robot
   double radius = 0.0;
   std::vector<std::pair<double, Pose2>> poses;
 
   Pose2 at(double t, double t0) const {
-    if (kind == kStatic) return Pose2{center.x(), center.y(), 0.0};
+    if (kind == kStatic) return Pose2{center.x(), center.y(), heading};
     if (kind == kCircle) {
       const double w = 0.4 / radius;  // 0.4 m/s
       const double a = w * (t - t0);
@@ -129,8 +130,10 @@ std::uint64_t mix(std::uint64_t a, std::uint64_t b) {
 }  // namespace
 
 BenchResult runBench(const BenchParams& params) {
-  if (params.world != "auto")
-    throw InputError("world '" + params.world + "' is not supported yet (only --world auto; world files come with the simulator component)");
+  const bool auto_world = params.world == "auto";
+  if (!auto_world && !params.world_geometry)
+    throw InputError("world '" + params.world + "': only --world auto without the simulator component (cairn-people "
+                     "built with components/sim reads its worlds)");
   if (!(params.scan_rate > 0.0)) throw InputError("scan rate must be positive");
   if (params.oracle_detections && !(params.oracle_sigma > 0.0 && params.oracle_sigma < 10.0))
     throw InputError("oracle sigma must be in (0, 10) m");
@@ -142,13 +145,24 @@ BenchResult runBench(const BenchParams& params) {
 
   // Auto world: walls 1.5 m outside the bounding box of all trajectories, robot at the centre.
   const Eigen::Vector2d lo = traj.min - Eigen::Vector2d(1.5, 1.5), hi = traj.max + Eigen::Vector2d(1.5, 1.5);
-  const Eigen::Vector2d center = 0.5 * (lo + hi);
+  // World: the trajectories are moved into it (world = offset (+) data), the robot starts at the world's pose.
+  Pose2 offset{};
+  if (!auto_world) {
+    const Eigen::Vector2d mid = 0.5 * (traj.min + traj.max);
+    offset = params.trajectory_offset ? *params.trajectory_offset
+                                      : Pose2{params.robot_start.x - mid.x(), params.robot_start.y - mid.y(), 0.0};
+  }
+  const Eigen::Vector2d center =
+      auto_world ? Eigen::Vector2d(0.5 * (lo + hi)) : Eigen::Vector2d(params.robot_start.x, params.robot_start.y);
   Scene walls;
-  walls.addSegment({lo.x(), lo.y()}, {hi.x(), lo.y()}, ObjectClass::kWall);
-  walls.addSegment({hi.x(), lo.y()}, {hi.x(), hi.y()}, ObjectClass::kWall);
-  walls.addSegment({hi.x(), hi.y()}, {lo.x(), hi.y()}, ObjectClass::kWall);
-  walls.addSegment({lo.x(), hi.y()}, {lo.x(), lo.y()}, ObjectClass::kWall);
-  const RobotPath robot = parseRobotPath(params.robot_path, center);
+  if (auto_world) {
+    walls.addSegment({lo.x(), lo.y()}, {hi.x(), lo.y()}, ObjectClass::kWall);
+    walls.addSegment({hi.x(), lo.y()}, {hi.x(), hi.y()}, ObjectClass::kWall);
+    walls.addSegment({hi.x(), hi.y()}, {lo.x(), hi.y()}, ObjectClass::kWall);
+    walls.addSegment({lo.x(), hi.y()}, {lo.x(), lo.y()}, ObjectClass::kWall);
+  }
+  RobotPath robot = parseRobotPath(params.robot_path, center);
+  if (!auto_world && robot.kind == RobotPath::kStatic) robot.heading = params.robot_start.theta;
 
   LaserModel laser = params.laser;
   if (!params.laser_fov_set) {
@@ -207,9 +221,11 @@ BenchResult runBench(const BenchParams& params) {
     const double t = t0 + static_cast<double>(k) * dt;
     if (t > t_end) break;
     Scene scene = walls;
+    if (params.world_geometry) params.world_geometry(t, scene);
     std::vector<int> present;
     for (auto& [id, w] : walkers) {
-      const auto p = traj.positionAt(id, t);
+      auto p = traj.positionAt(id, t);
+      if (p) *p = offset.transform(*p);
       if (!p) {
         last_pos.erase(id);
         continue;

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "cairn/people_tracking/bench.hpp"
 #include "sim_training.hpp"
 
 using namespace cairn::people_tracking;
@@ -112,4 +113,36 @@ TEST(SimTraining, GeneratedDataIsDeterministicAndHasBothLabels) {
   EXPECT_GT(pos, 0u);
   EXPECT_GT(a.size() - pos, pos);
   EXPECT_GT(furniture, 0u);
+}
+
+// `cairn people bench --world <sim world>`: the world's geometry goes into the bench's scenes, the robot stands at
+// the world's start pose, and the trajectories are centred on it. In the test world's 10 m room the walls cut the
+// view that the auto world (walls 1.5 m outside the trajectories) leaves open; a wall across the room hides half.
+TEST(BenchInSimWorld, WorldGeometryRobotStartAndTrajectoryOffset) {
+  sim::World w = testWorld();
+  w.walls.push_back({{0.5, -5}, {0.5, 5}});  // a wall 0.5 m in front of the robot, across the whole room
+  w.robot_start = sim::Pose2{0.0, 0.0, 0.0};
+  Scene scene;
+  addWorldGeometry(w, 0.0, scene);
+  EXPECT_EQ(scene.segments.size(), 5u);
+  EXPECT_EQ(scene.circles.size(), 4u);  // the table's legs
+
+  BenchParams p;
+  p.trajectories = std::string(CAIRN_SOURCE_ROOT) + "/test/data/people/eth_seq_eth_obsmat_head400.txt";
+  p.seed = 3;
+  const BenchResult open = runBench(p);
+  p.world = "test";
+  p.world_geometry = [&w](double t, Scene& s) { addWorldGeometry(w, t, s); };
+  p.robot_start = Pose2{0.0, 0.0, 0.0};
+  const BenchResult walled = runBench(p);
+  EXPECT_EQ(walled.scans, open.scans);
+  EXPECT_GT(open.mean_people_counted, 2.0);
+  EXPECT_GT(walled.mean_people_counted, 0.1);                       // people behind the robot are seen
+  EXPECT_LT(walled.mean_people_counted, 0.7 * open.mean_people_counted);  // the wall in front hides many
+  // Moving the trajectories 50 m away leaves nobody in range.
+  p.trajectory_offset = Pose2{50.0, 0.0, 0.0};
+  EXPECT_EQ(runBench(p).cairn.mot.gt, 0u);
+  // Without geometry a named world is an error.
+  p.world_geometry = nullptr;
+  EXPECT_THROW(runBench(p), InputError);
 }

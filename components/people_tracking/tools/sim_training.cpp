@@ -15,6 +15,16 @@
 
 namespace cairn::people_tracking {
 
+void addWorldGeometry(const sim::World& world, double t, Scene& scene) {
+  auto v = [](const sim::Vec2& p) { return Eigen::Vector2d(p.x, p.y); };
+  for (const sim::Segment& w : world.walls) scene.addSegment(v(w.a), v(w.b), ObjectClass::kWall);
+  std::vector<sim::Segment> segments;
+  std::vector<sim::Circle> circles;
+  world.dynamicGeometry(t, segments, circles);
+  for (const sim::Segment& w : segments) scene.addSegment(v(w.a), v(w.b), ObjectClass::kWall);
+  for (const sim::Circle& c : circles) scene.addCircle(v(c.center), c.radius, ObjectClass::kTableLeg);
+}
+
 LaserScan fromSimScan(const sim::LaserScan& scan) {
   LaserScan ls;
   ls.stamp = scan.stamp;

@@ -12,6 +12,7 @@
 
 #include "cairn/people_tracking/classifier.hpp"
 #include "cairn/people_tracking/scan.hpp"
+#include "cairn/people_tracking/scene.hpp"
 #include "cairn/people_tracking/segmentation.hpp"
 #include "cairn/sim/simulator.hpp"
 
@@ -19,6 +20,12 @@ namespace cairn::people_tracking {
 
 /// The simulator's scan as the people pipeline's LaserScan (+inf / NaN stay "no return").
 LaserScan fromSimScan(const sim::LaserScan& scan);
+
+/// A simulator world's laser-visible geometry at time t, appended to a people_tracking scene (for `cairn people
+/// bench --world <sim world>`): walls, door panels and furniture outlines as segments, furniture legs and markers
+/// as circles. Only geometry is needed there (the bench counts beams on walkers), so segments are kWall and
+/// circles kTableLeg regardless of what they are.
+void addWorldGeometry(const sim::World& world, double t, Scene& scene);
 
 struct SimLabelParams {
   double surface_tolerance = 0.05;  ///< m, a return within this of an object's surface belongs to it

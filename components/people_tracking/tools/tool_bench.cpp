@@ -3,8 +3,15 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "cairn/people_tracking/bench.hpp"
+#ifdef CAIRN_PEOPLE_SIM
+#include <memory>
+
+#include "cairn/sim/world.hpp"
+#include "sim_training.hpp"
+#endif
 
 using namespace cairn::people_tracking;
 
@@ -67,9 +74,34 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--min-points") p.detector.segmentation.min_points = static_cast<int>(number(value()));
     else if (a == "--sigma-pair") p.detector.sigma_pair = number(value());
     else if (a == "--sigma-single") p.detector.sigma_single = number(value());
+    else if (a == "--trajectory-offset") {  // x,y[,theta]: world = offset (+) data
+      const std::string v = value();
+      std::vector<double> xyt;
+      for (std::size_t begin = 0;;) {
+        const std::size_t end = v.find(',', begin);
+        xyt.push_back(number(v.substr(begin, end == std::string::npos ? std::string::npos : end - begin)));
+        if (end == std::string::npos) break;
+        begin = end + 1;
+      }
+      if (xyt.size() < 2 || xyt.size() > 3) throw InputError("--trajectory-offset expects x,y or x,y,theta, got '" + v + "'");
+      p.trajectory_offset = Pose2{xyt[0], xyt[1], xyt.size() == 3 ? xyt[2] : 0.0};
+    }
     else throw InputError("unknown bench option '" + a + "'");
   }
   if (p.trajectories.empty()) throw InputError("bench needs --trajectories FILE");
+  if (p.trajectory_offset && p.world == "auto") throw InputError("--trajectory-offset needs a --world other than auto");
+#ifdef CAIRN_PEOPLE_SIM
+  if (p.world != "auto") {
+    std::shared_ptr<const cairn::sim::World> world;
+    try {
+      world = std::make_shared<const cairn::sim::World>(cairn::sim::loadWorld(cairn::sim::resolveWorldPath(p.world)));
+    } catch (const cairn::sim::InputError& e) {
+      throw InputError(std::string("--world: ") + e.what());
+    }
+    p.robot_start = Pose2{world->robot_start.x, world->robot_start.y, world->robot_start.theta};
+    p.world_geometry = [world](double t, Scene& scene) { addWorldGeometry(*world, t, scene); };
+  }
+#endif
   const BenchResult r = runBench(p);
   if (json) {
     std::printf("%s\n", benchJson(p, r).c_str());

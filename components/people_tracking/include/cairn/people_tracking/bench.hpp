@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <optional>
 #include <string>
 
 #include "cairn/people_tracking/clear_mot.hpp"
@@ -14,7 +16,14 @@ namespace cairn::people_tracking {
 
 struct BenchParams {
   std::string trajectories;
-  std::string world = "auto";  // "auto": open walled area around the trajectories, robot at its centre
+  // "auto": open walled area around the trajectories, robot at its centre. Any other name needs world_geometry
+  // (the tool fills it from a components/sim world when built with the simulator).
+  std::string world = "auto";
+  // Static and scheduled geometry of the world at time t (walls, doors, furniture, markers), appended to scene.
+  std::function<void(double t, Scene& scene)> world_geometry;
+  Pose2 robot_start{};  // world: the static robot's pose, and the centre of circle:R paths
+  // world: world = trajectory_offset (+) data. Unset: the trajectories' bounding-box centre goes to robot_start.
+  std::optional<Pose2> trajectory_offset;
   std::string robot_path;      // "" static; "circle:R" circles the centre at 0.4 m/s; or CSV t,x,y,theta
   std::uint64_t seed = 1;
   double scan_rate = 10.0;     // Hz
