@@ -13,6 +13,7 @@
 
 #include "cairn/people_tracking/classifier.hpp"
 #include "cairn/people_tracking/detector.hpp"
+#include "cairn/people_tracking/static_map.hpp"
 #include "cairn/people_tracking/trajectories.hpp"
 
 namespace cairn::people_tracking {
@@ -213,6 +214,11 @@ BenchResult runBench(const BenchParams& params) {
   result.format = traj.format;
   result.people_in_file = traj.people.size();
   const double t0 = traj.t_begin + params.start;
+  if (params.static_map) {
+    Scene fixed = walls;
+    if (params.world_geometry) params.world_geometry(t0, fixed);
+    tracker.setStaticMap(std::make_shared<const StaticMap>(rasterize(fixed)));
+  }
   const double t_end = params.duration > 0 ? std::min(traj.t_end, t0 + params.duration) : traj.t_end;
   const double dt = 1.0 / params.scan_rate;
   double counted_sum = 0.0;

@@ -221,8 +221,13 @@ TrackerStatus PeopleTracker::updateLegs(double stamp, const std::vector<LegDetec
   const TrackerStatus status = checkTime(stamp);
   std::vector<LegDetection> in_frame;
   in_frame.reserve(legs.size());
-  for (const auto& l : legs)
-    if (l.position.allFinite()) in_frame.push_back({sensor_pose.transform(l.position), l.confidence, l.width});
+  for (const auto& l : legs) {
+    if (!l.position.allFinite()) continue;
+    const Eigen::Vector2d p = sensor_pose.transform(l.position);
+    // Legs on the static map are parts of it (wall ends, furniture seen edge-on): neither start nor feed tracks.
+    if (static_map_ && static_map_->occupiedWithin(p, params_.static_map_margin)) continue;
+    in_frame.push_back({p, l.confidence, l.width});
+  }
   std::vector<int> det_track;
   std::vector<PersonDetection> dets = pairWithTracks(in_frame, pairing, det_track);
   std::vector<bool> used(dets.size(), false);

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 
 #include "cairn/people_tracking/bench.hpp"
 #include "sim_training.hpp"
@@ -145,4 +146,22 @@ TEST(BenchInSimWorld, WorldGeometryRobotStartAndTrajectoryOffset) {
   // Without geometry a named world is an error.
   p.world_geometry = nullptr;
   EXPECT_THROW(runBench(p), InputError);
+}
+
+// The apartment's hallway ends in two wall ends 7 m in front of the robot, which the classifier takes for legs:
+// phantom tracks for the whole run. With the world's geometry as static map they are gone.
+TEST(BenchInSimWorld, StaticMapRemovesPhantomTracksOnWallEnds) {
+  const auto world = std::make_shared<const sim::World>(sim::loadWorld(sim::resolveWorldPath("apartment")));
+  BenchParams p;
+  p.trajectories = std::string(CAIRN_SOURCE_ROOT) + "/test/data/people/eth_seq_eth_obsmat_head400.txt";
+  p.seed = 3;
+  p.world = "apartment";
+  p.world_geometry = [world](double t, Scene& s) { addWorldGeometry(*world, t, s); };
+  p.robot_start = Pose2{world->robot_start.x, world->robot_start.y, world->robot_start.theta};
+  const BenchResult plain = runBench(p);
+  p.static_map = true;
+  const BenchResult mapped = runBench(p);
+  EXPECT_GT(plain.cairn.mot.fp, plain.scans);  // at least one phantom per scan on average
+  EXPECT_LT(mapped.cairn.mot.fp, plain.cairn.mot.fp / 10);
+  EXPECT_GT(mapped.cairn.mot.mota(), plain.cairn.mot.mota());
 }

@@ -7,6 +7,7 @@
 #include <algorithm>
 
 #include "cairn/people_tracking/assignment.hpp"
+#include "cairn/people_tracking/static_map.hpp"
 #include "cairn/people_tracking/tracker.hpp"
 
 using namespace cairn::people_tracking;
@@ -438,4 +439,56 @@ TEST(Tracker, ImmKeepsATrackThroughASharpTurn) {
   EXPECT_LT(median(10, 30), 0.1);                                       // steady walk before the turn
   EXPECT_GT(*std::max_element(pm.begin() + 31, pm.begin() + 36), 0.5);  // the turn
   EXPECT_LT(median(45, 61), 0.1);                                       // steady again
+}
+
+TEST(StaticMap, RasterizesStaticGeometryAndAnswersNearness) {
+  Scene scene;
+  scene.addSegment({0.0, 0.0}, {2.0, 0.0}, ObjectClass::kWall);
+  scene.addCircle({5.0, 5.0}, 0.03, ObjectClass::kTableLeg);
+  scene.addCircle({9.0, 9.0}, 0.06, ObjectClass::kPersonLeg, 1);  // people are not static
+  const StaticMap m = rasterize(scene, 0.05);
+  EXPECT_TRUE(m.occupiedWithin({1.0, 0.05}, 0.1));
+  EXPECT_FALSE(m.occupiedWithin({1.0, 0.3}, 0.1));
+  EXPECT_TRUE(m.occupiedWithin({5.05, 5.0}, 0.1));
+  EXPECT_FALSE(m.occupiedWithin({2.5, 0.0}, 0.1));  // beyond the wall's end
+  EXPECT_FALSE(m.occupiedWithin({9.0, 9.0}, 0.2));  // outside the grid (the person was left out)
+  StaticMap moved = m;
+  moved.map_from_tracking = Pose2{0.0, -1.0, 0.0};  // tracking-frame y = 1 is map y = 0
+  EXPECT_TRUE(moved.occupiedWithin({1.0, 1.0}, 0.1));
+  EXPECT_FALSE(moved.occupiedWithin({1.0, 0.05}, 0.1));
+}
+
+// A wall end seen from afar gives a leg-like cluster in every scan: without a static map it becomes a confirmed
+// "person" that never goes away; with the map its legs are dropped, while a person walking 1 m from the wall is
+// tracked as before.
+TEST(StaticMap, LegsOnTheMapNeitherStartNorFeedTracks) {
+  Scene scene;
+  scene.addSegment({5.0, -3.0}, {5.0, 0.0}, ObjectClass::kWall);  // wall ending at (5, 0)
+  auto run = [&](bool with_map) {
+    PeopleTracker tracker;
+    if (with_map) tracker.setStaticMap(std::make_shared<const StaticMap>(rasterize(scene)));
+    const DetectorParams pairing;
+    int phantom = 0, walker_scans = 0;
+    for (int k = 0; k < 40; ++k) {
+      const double t = 0.1 * k;
+      const Eigen::Vector2d walker(2.0 + 0.08 * k, 1.0);
+      std::vector<LegDetection> legs = {{{5.02, 0.02}, 0.8, 0.05},  // the wall end, in every scan
+                                        {walker + Eigen::Vector2d(0.1, 0.1), 0.9, 0.1},
+                                        {walker + Eigen::Vector2d(-0.1, -0.1), 0.9, 0.1}};
+      tracker.updateLegs(t, legs, Pose2{}, pairing);
+      bool walker_seen = false;
+      for (const Track& tr : tracker.outputTracks()) {
+        if ((tr.position() - Eigen::Vector2d(5.0, 0.0)).norm() < 0.3) ++phantom;
+        walker_seen |= (tr.position() - walker).norm() < 0.3;
+      }
+      walker_scans += walker_seen;
+    }
+    return std::pair{phantom, walker_scans};
+  };
+  const auto [phantom_without, walker_without] = run(false);
+  const auto [phantom_with, walker_with] = run(true);
+  EXPECT_GT(phantom_without, 30);
+  EXPECT_EQ(phantom_with, 0);
+  EXPECT_GT(walker_without, 30);
+  EXPECT_EQ(walker_with, walker_without);
 }

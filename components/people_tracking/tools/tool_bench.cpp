@@ -49,6 +49,8 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--max-position-sigma") p.tracker.max_position_sigma = number(value());
     else if (a == "--confirm-hits") p.tracker.confirm_hits = static_cast<int>(number(value()));
     else if (a == "--oracle-detections") p.oracle_detections = true;
+    else if (a == "--static-map") p.static_map = true;
+    else if (a == "--static-map-margin") p.tracker.static_map_margin = number(value());
     else if (a == "--oracle-sigma") p.oracle_sigma = number(value());
     else if (a == "--pairing") {
       const std::string v = value();

@@ -6,11 +6,13 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "cairn/people_tracking/detector.hpp"
 #include "cairn/people_tracking/scan.hpp"
+#include "cairn/people_tracking/static_map.hpp"
 
 namespace cairn::people_tracking {
 
@@ -81,6 +83,8 @@ struct TrackerParams {
   double maneuver_process_noise = 0.0;  // m^2/s^3
   double maneuver_rate = 0.5;           // 1/s, walking -> maneuver
   double maneuver_end_rate = 2.0;       // 1/s, maneuver -> walking
+  // With a static map (setStaticMap, updateLegs): legs within this distance of an occupied cell are dropped.
+  double static_map_margin = 0.1;  // m
 };
 
 // Why a track got no leg in the last scan (updateLegs with a scan; kUnknown without one).
@@ -141,6 +145,8 @@ class PeopleTracker {
   [[nodiscard]] std::vector<Track> outputTracks() const;
   [[nodiscard]] const TrackerParams& params() const { return params_; }
   void reset();
+  // Static occupancy (static_map.hpp): updateLegs drops legs on it; nullptr removes it. Kept across reset().
+  void setStaticMap(std::shared_ptr<const StaticMap> map) { static_map_ = std::move(map); }
 
  private:
   TrackerStatus checkTime(double stamp);
@@ -169,6 +175,7 @@ class PeopleTracker {
   std::vector<Eigen::Vector2d> split_births_;  // this scan's detections split off a track (initiate() ignores min_init_distance)
 
   TrackerParams params_;
+  std::shared_ptr<const StaticMap> static_map_;
   std::vector<Track> tracks_;
   std::vector<bool> updated_;  // per track, associated in the current scan
   double last_stamp_ = 0.0;
