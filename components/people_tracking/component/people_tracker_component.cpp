@@ -23,12 +23,14 @@
 #include "cairn/people_tracking/detector.hpp"
 #include "cairn/people_tracking/guide.hpp"
 #include "cairn/people_tracking/masking.hpp"
+#include "cairn/people_tracking/static_map.hpp"
 #include "cairn/people_tracking/tracker.hpp"
 #include "cairn/tf.hpp"
 #include "cairn_people_msgs/msg/GuideState.hpp"
 #include "cairn_people_msgs/msg/PersonDetections.hpp"
 #include "cairn_people_msgs/msg/TrackedPersons.hpp"
 #include "cairn_people_msgs/srv/Follow.hpp"
+#include "nav_msgs/msg/OccupancyGrid.hpp"
 #include "nav_msgs/msg/Odometry.hpp"
 #include "sensor_msgs/msg/LaserScan.hpp"
 
@@ -153,6 +155,10 @@ class PeopleTracker : public cairn::Node {
     tp.free_space_delete_scans = static_cast<int>(declare_parameter<int64_t>("tracker.free_space_delete_scans", tp.free_space_delete_scans, D{"consecutive scans with beams through a track delete it", 1.0, 1000.0, true}));
     tp.split_scans = static_cast<int>(declare_parameter<int64_t>("tracker.split_scans", tp.split_scans, D{"scans with four legs in a track's gate before it splits (0 = never)", 0.0, 1000.0, true}));
     tp.single_leg_stride_sigma = declare_parameter<double>("tracker.single_leg_stride_sigma", tp.single_leg_stride_sigma, D{"m, single-leg update std along the walking direction (0 = off)", 0.0, 2.0, true});
+    // Static map (static_map.hpp): legs on its occupied cells are dropped (wall ends, furniture seen edge-on).
+    static_map_topic_ = declare_parameter<std::string>("static_map.topic", "", D{"OccupancyGrid (latched) whose occupied cells are not people, e.g. the SLAM map; empty = off", {}, {}, true});
+    tp.static_map_margin = declare_parameter<double>("static_map.margin", tp.static_map_margin, D{"m, legs this close to an occupied cell are dropped", 0.0, 2.0, true});
+    static_map_threshold_ = static_cast<int>(declare_parameter<int64_t>("static_map.occupied_threshold", 65, D{"cell value (0-100) from which a cell is occupied", 1.0, 100.0, true}));
 
     // Guide (guide.hpp; Yuan §2.2.1).
     pt::GuideParams gp;
@@ -201,6 +207,9 @@ class PeopleTracker : public cairn::Node {
     masked_pub_ = create_publisher<sensor_msgs::msg::LaserScan>("scan_filtered", cairn::QoS::sensor_data());
     scan_sub_ = create_subscription<sensor_msgs::msg::LaserScan>(
         "scan", cairn::QoS::sensor_data(), [this](const sensor_msgs::msg::LaserScan& m) { onScan(m); });
+    if (!static_map_topic_.empty())
+      map_sub_ = create_subscription<nav_msgs::msg::OccupancyGrid>(
+          static_map_topic_, cairn::QoS::latched(), [this](const nav_msgs::msg::OccupancyGrid& m) { onMap(m); });
     if (use_odom_)
       odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
           "odom", cairn::QoS{}, [this](const nav_msgs::msg::Odometry& m) { onOdom(m); });
@@ -250,6 +259,59 @@ class PeopleTracker : public cairn::Node {
   }
 
   // At most one warning per key and second, with the number of suppressed repeats.
+  // The static map as the tracker's StaticMap: cells >= the threshold are occupied; the grid's origin pose
+  // (possibly rotated) is folded into map_from_tracking together with TF map <- tracking frame per scan.
+  void onMap(const nav_msgs::msg::OccupancyGrid& m) {
+    const auto w = static_cast<int>(m.info.width), h = static_cast<int>(m.info.height);
+    if (w <= 0 || h <= 0 || m.data.size() != static_cast<std::size_t>(w) * static_cast<std::size_t>(h) ||
+        !(m.info.resolution > 0.0F) || !std::isfinite(m.info.origin.position.x) || !std::isfinite(m.info.origin.position.y)) {
+      warn("map_invalid", "static map on '" + static_map_topic_ + "': " + std::to_string(w) + " x " + std::to_string(h) +
+                              " cells, " + std::to_string(m.data.size()) + " values, resolution " +
+                              std::to_string(m.info.resolution) + ": ignored");
+      return;
+    }
+    auto map = std::make_shared<pt::StaticMap>();
+    map->width = w;
+    map->height = h;
+    map->resolution = m.info.resolution;
+    map->occupied.resize(m.data.size());
+    for (std::size_t i = 0; i < m.data.size(); ++i) map->occupied[i] = m.data[i] >= static_map_threshold_ ? 1 : 0;
+    const auto& q = m.info.origin.orientation;
+    const double yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+    grid_from_map_ = inverse(pt::Pose2{m.info.origin.position.x, m.info.origin.position.y, yaw});
+    map_frame_ = m.header.frame_id;
+    static_map_ = std::move(map);
+  }
+
+  // Before each scan: the grid's pose in the tracking frame (identity TF when the map is in that frame).
+  void attachStaticMap(const std::string& tracking_frame) {
+    if (!static_map_) return;
+    pt::Pose2 map_from_tracking{};
+    if (!map_frame_.empty() && map_frame_ != tracking_frame) {
+      try {
+        if (!tf_buffer_) throw cairn::TransformError("no TF listener (use_odom is false)");
+        const cairn::RigidTransform tf = tf_buffer_->lookup(map_frame_, tracking_frame, cairn::Time{0});
+        const Eigen::Vector3d x = tf.q * Eigen::Vector3d::UnitX();
+        map_from_tracking = pt::Pose2{tf.t.x(), tf.t.y(), std::atan2(x.y(), x.x())};
+      } catch (const cairn::TransformError& e) {
+        warn("map_no_tf", "static map: no TF " + map_frame_ + " <- " + tracking_frame + " (" + e.what() +
+                              "), scan processed without it");
+        tracker_->setStaticMap(nullptr);
+        return;
+      }
+    }
+    static_map_->map_from_tracking = compose(grid_from_map_, map_from_tracking);
+    tracker_->setStaticMap(static_map_);
+  }
+  static pt::Pose2 compose(const pt::Pose2& a, const pt::Pose2& b) {
+    const Eigen::Vector2d t = a.transform({b.x, b.y});
+    return pt::Pose2{t.x(), t.y(), wrapAngle(a.theta + b.theta)};
+  }
+  static pt::Pose2 inverse(const pt::Pose2& a) {
+    const Eigen::Vector2d t = -(a.rotation().transpose() * Eigen::Vector2d(a.x, a.y));
+    return pt::Pose2{t.x(), t.y(), wrapAngle(-a.theta)};
+  }
+
   void warn(const std::string& key, const std::string& what) {
     auto& w = warnings_[key];
     const auto now = std::chrono::steady_clock::now();
@@ -380,6 +442,7 @@ class PeopleTracker : public cairn::Node {
     }
     // Published detections: the detector's own pairing (laser frame); tracking pairs the legs with the tracks.
     const std::vector<pt::PersonDetection> dets = pt::pairLegs(legs, detector_->params());
+    attachStaticMap(frame);
     const pt::TrackerStatus st = tracker_->updateLegs(scan.stamp, legs, sensor, detector_->params(), &scan);
     if (st.reset) warn("tracker_reset", "tracker reset: " + st.reason);
     last_tracks_ = tracker_->outputTracks();
@@ -492,6 +555,11 @@ class PeopleTracker : public cairn::Node {
   bool mount_from_tf_ = false, mount_fallback_logged_ = false;
   std::optional<double> first_scan_stamp_;
   std::shared_ptr<cairn::TransformBuffer> tf_buffer_;
+  std::string static_map_topic_;
+  int static_map_threshold_ = 65;
+  std::shared_ptr<pt::StaticMap> static_map_;  // shared with the tracker; its map_from_tracking is set per scan
+  pt::Pose2 grid_from_map_{};
+  std::string map_frame_;
   std::unique_ptr<cairn::TransformListener> tf_listener_;
   std::string mask_mode_;
   pt::MaskParams mask_;
@@ -511,6 +579,7 @@ class PeopleTracker : public cairn::Node {
   std::shared_ptr<cairn::Publisher<sensor_msgs::msg::LaserScan>> masked_pub_;
   std::shared_ptr<cairn::Subscription<sensor_msgs::msg::LaserScan>> scan_sub_;
   std::shared_ptr<cairn::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
+  std::shared_ptr<cairn::Subscription<nav_msgs::msg::OccupancyGrid>> map_sub_;
   std::shared_ptr<cairn::Service<psrv::Follow_Request, psrv::Follow_Response>> follow_srv_;
 };
 

@@ -21,6 +21,7 @@
 #include "cairn_people_msgs/msg/GuideState.hpp"
 #include "cairn_people_msgs/msg/TrackedPersons.hpp"
 #include "cairn_people_msgs/srv/Follow.hpp"
+#include "nav_msgs/msg/OccupancyGrid.hpp"
 #include "nav_msgs/msg/Odometry.hpp"
 #include "sensor_msgs/msg/LaserScan.hpp"
 #include "tf2_msgs/msg/TFMessage.hpp"
@@ -75,6 +76,7 @@ struct World {
   // Laser in base_link: ahead, to the left and turned by 0.3 rad, so a component ignoring the mount misplaces
   // people at 3 m by ~1 m.
   pt::Pose2 mount{0.30, 0.10, 0.30};
+  std::vector<Eigen::Vector2d> static_legs;  // leg-like static objects (none unless a test adds them)
 
   World() {
     a.position = {2.5, 1.2};
@@ -121,6 +123,7 @@ struct World {
     scene.addSegment({-2.0, -4.0}, {10.0, -4.0}, pt::ObjectClass::kWall);
     scene.addSegment({-2.0, 4.5}, {10.0, 4.5}, pt::ObjectClass::kWall);
     scene.addBox({7.0, 2.5}, 0.4, 0.3, 0.2, pt::ObjectClass::kClutter);
+    for (const Eigen::Vector2d& c : static_legs) scene.addCircle(c, 0.06, pt::ObjectClass::kTableLeg);
     pt::addWalker(scene, a, 0);
     pt::addWalker(scene, b, 1);
     return pt::renderScan(scene, laserPose(t), laser, t, rng).scan;
@@ -463,6 +466,102 @@ TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning
   EXPECT_EQ(heard.tracks.at(key(stampOf(back))).header.frame_id, "laser");
   EXPECT_TRUE(heard.tracks.at(key(stampOf(back))).tracks.empty()) << "a reset tracker has no confirmed tracks";
 
+}
+
+// Two leg-like posts 0.25 m apart stand still 5 m ahead: without a static map the tracker reports them as a
+// person; with `static_map.topic` and a latched OccupancyGrid (in the odometry frame, grid origin rotated by 90
+// degrees so the origin pose is honoured) whose cells cover them they are dropped, and the walking person is
+// tracked either way.
+TEST(PeopleTrackerComponent, StaticMapDropsLegsOnMappedCells) {
+  const std::vector<Eigen::Vector2d> posts = {{5.0, 2.5}, {5.0, 2.75}};
+  auto run = [&](bool with_map, int& on_posts, int& on_a) {
+    World world;
+    world.static_legs = posts;
+    auto ctx = cairn::Context::create();
+    cairn::Executor exec;
+    cairn::ComponentLoader loader;
+    cairn::ComponentManager mgr(ctx, exec, with_map ? "people_container5" : "people_container4", loader);
+    cairn::LoadRequest req{"cairn_people_tracking::PeopleTracker", "people_tracker"};
+    req.parameters["tf_timeout"] = 0.2;
+    req.parameters["base_frame"] = std::string("base_footprint");  // mount from the parameters below
+    req.parameters["sensor_x"] = world.mount.x;
+    req.parameters["sensor_y"] = world.mount.y;
+    req.parameters["sensor_yaw"] = world.mount.theta;
+    if (with_map) req.parameters["static_map.topic"] = std::string("map");
+    const auto loaded = mgr.load(req);
+    ASSERT_TRUE(loaded.ok) << loaded.error;
+    Spinner spinner(exec);
+
+    auto sim_ctx = cairn::Context::create();
+    cairn::Executor sim_exec;
+    cairn::NodeOptions o("sim", &sim_exec);
+    o.context = sim_ctx;
+    o.start_parameter_services = false;
+    cairn::Node sim(o);
+    Heard heard;
+    auto scan_pub = sim.create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS{});
+    auto odom_pub = sim.create_publisher<nav_msgs::msg::Odometry>("odom", cairn::QoS{});
+    auto map_pub = sim.create_publisher<nav_msgs::msg::OccupancyGrid>("map", cairn::QoS::latched());
+    auto tracks_sub = sim.create_subscription<pmsg::TrackedPersons>("people/tracks", cairn::QoS{}, [&](const pmsg::TrackedPersons& m) {
+      std::lock_guard l(heard.mu);
+      heard.tracks[key(m.header.stamp)] = m;
+    });
+    Spinner sim_spinner(sim_exec);
+    ASSERT_TRUE(waitFor([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s));
+    ASSERT_TRUE(waitFor([&] { return tracks_sub->publisher_count_inter_process() > 0; }, 20s));
+    if (with_map) {
+      // 40 x 40 cells of 5 cm; origin at (6, 2) turned by +90 deg: cell (i, j) centre = (6 - (j + 0.5) r, 2 + (i + 0.5) r).
+      nav_msgs::msg::OccupancyGrid grid;
+      grid.header.frame_id = "odom";
+      grid.info.resolution = 0.05F;
+      grid.info.width = grid.info.height = 40;
+      grid.info.origin.position.x = 6.0;
+      grid.info.origin.position.y = 2.0;
+      grid.info.origin.orientation.z = std::sin(M_PI / 4);
+      grid.info.origin.orientation.w = std::cos(M_PI / 4);
+      grid.data.assign(40 * 40, 0);
+      for (int j = 0; j < 40; ++j)
+        for (int i = 0; i < 40; ++i) {
+          const Eigen::Vector2d c(6.0 - (j + 0.5) * 0.05, 2.0 + (i + 0.5) * 0.05);
+          for (const Eigen::Vector2d& p : posts)
+            if ((c - p).norm() <= 0.07) grid.data[static_cast<std::size_t>(j * 40 + i)] = 100;
+        }
+      map_pub->publish(grid);
+      ASSERT_TRUE(waitFor([&] { return map_pub->inter_process_subscription_count() > 0; }, 20s));
+    }
+    const double dt = 1.0 / 15.0;
+    const int steps = 45;
+    for (int k = 0; k < steps; ++k) {
+      const double t = 300.0 + k * dt;
+      pt::LaserScan s = world.scanAt(k * dt, dt);
+      s.stamp = t;
+      auto odom = world.odomAt(k * dt);
+      odom.header.stamp = stampOf(t);
+      odom_pub->publish(odom);
+      scan_pub->publish(toMsg(s));
+      waitFor([&] {
+        std::lock_guard l(heard.mu);
+        return heard.tracks.count(key(stampOf(t))) > 0;
+      }, k * dt < 0.3 ? 200ms : 5s);  // the first scans wait for the TF timeout (0.2 s of scan time)
+    }
+    sim_spinner.stop();
+    spinner.stop();
+    std::lock_guard l(heard.mu);
+    for (int k = 15; k < steps; ++k) {
+      const auto it = heard.tracks.find(key(stampOf(300.0 + k * dt)));
+      if (it == heard.tracks.end()) continue;
+      for (const auto& tr : it->second.tracks)
+        if ((Eigen::Vector2d(tr.position.x, tr.position.y) - 0.5 * (posts[0] + posts[1])).norm() < 0.35) ++on_posts;
+      if (trackNear(it->second, world.personA(k * dt), 0.35)) ++on_a;
+    }
+  };
+  int posts_without = 0, a_without = 0, posts_with = 0, a_with = 0;
+  run(false, posts_without, a_without);
+  run(true, posts_with, a_with);
+  EXPECT_GE(posts_without, 20) << "the posts should look like a person without the map (else the test shows nothing)";
+  EXPECT_EQ(posts_with, 0) << "legs on mapped cells must not make a person";
+  EXPECT_GE(a_without, 25);
+  EXPECT_GE(a_with, 25);
 }
 
 namespace {
