@@ -258,7 +258,6 @@ class PeopleTracker : public cairn::Node {
     }
   }
 
-  // At most one warning per key and second, with the number of suppressed repeats.
   // The static map as the tracker's StaticMap: cells >= the threshold are occupied; the grid's origin pose
   // (possibly rotated) is folded into map_from_tracking together with TF map <- tracking frame per scan.
   void onMap(const nav_msgs::msg::OccupancyGrid& m) {
@@ -312,6 +311,7 @@ class PeopleTracker : public cairn::Node {
     return pt::Pose2{t.x(), t.y(), wrapAngle(-a.theta)};
   }
 
+  // At most one warning per key and second, with the number of suppressed repeats.
   void warn(const std::string& key, const std::string& what) {
     auto& w = warnings_[key];
     const auto now = std::chrono::steady_clock::now();

@@ -25,7 +25,7 @@ struct BenchParams {
   // world: world = trajectory_offset (+) data. Unset: the trajectories' bounding-box centre goes to robot_start.
   std::optional<Pose2> trajectory_offset;
   // The tracker gets the world's static geometry (the auto world's walls, or world_geometry at the start time)
-  // as a static map (static_map.hpp): legs next to it start no tracks.
+  // as a static map (static_map.hpp): legs next to it are dropped.
   bool static_map = false;
   std::string robot_path;      // "" static; "circle:R" circles the centre at 0.4 m/s; or CSV t,x,y,theta
   std::uint64_t seed = 1;
