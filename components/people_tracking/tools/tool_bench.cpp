@@ -1,5 +1,6 @@
 #include "tool_bench.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -28,6 +29,7 @@ int runBenchVerb(int argc, char** argv) {
       char* end = nullptr;
       const double x = std::strtod(v.c_str(), &end);
       if (v.empty() || *end != '\0') throw InputError("option " + a + " expects a number, got '" + v + "'");
+      if (!std::isfinite(x)) throw InputError("option " + a + " expects a finite number, got '" + v + "'");
       return x;
     };
     if (a == "--json") json = true;
