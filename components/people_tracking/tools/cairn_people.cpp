@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cairn/people_tracking/classifier.hpp"
+#include "cli_number.hpp"
 #include "tool_bench.hpp"
 #include "mask_bench.hpp"
 #ifdef CAIRN_PEOPLE_SIM
@@ -73,10 +74,7 @@ long toLong(const Args& a, const std::string& k, long def) {
 double toDouble(const Args& a, const std::string& k, double def) {
   const std::string v = a.get(k, "");
   if (v.empty()) return def;
-  char* end = nullptr;
-  const double x = std::strtod(v.c_str(), &end);
-  if (*end != '\0') fail("--" + k + " expects a number, got '" + v + "'");
-  return x;
+  return parseNumber("--" + k, v);
 }
 
 void usage() {

@@ -10,6 +10,8 @@
 // or the simulator.
 #include "mask_bench.hpp"
 
+#include "cli_number.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -355,12 +357,7 @@ int runMaskBenchVerb(int argc, char** argv) {
       if (i + 1 >= argc) throw InputError("option " + a + " needs a value");
       return argv[++i];
     };
-    auto number = [&](const std::string& v) {
-      char* end = nullptr;
-      const double x = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end != '\0') throw InputError("option " + a + " expects a number, got '" + v + "'");
-      return x;
-    };
+    auto number = [&](const std::string& v) { return parseNumber(a, v); };
     if (a == "--json") p.json = true;
     else if (a == "--world") p.world = value();
     else if (a == "--route") p.route = value();

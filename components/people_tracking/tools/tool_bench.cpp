@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cairn/people_tracking/bench.hpp"
+#include "cli_number.hpp"
 #ifdef CAIRN_PEOPLE_SIM
 #include <memory>
 
@@ -25,13 +26,7 @@ int runBenchVerb(int argc, char** argv) {
       if (i + 1 >= argc) throw InputError("option " + a + " needs a value");
       return argv[++i];
     };
-    auto number = [&](const std::string& v) {
-      char* end = nullptr;
-      const double x = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end != '\0') throw InputError("option " + a + " expects a number, got '" + v + "'");
-      if (!std::isfinite(x)) throw InputError("option " + a + " expects a finite number, got '" + v + "'");
-      return x;
-    };
+    auto number = [&](const std::string& v) { return parseNumber(a, v); };
     if (a == "--json") json = true;
     else if (a == "--world") p.world = value();
     else if (a == "--trajectories") p.trajectories = value();
