@@ -155,6 +155,74 @@ std::optional<uint32_t> trackNear(const pmsg::TrackedPersons& m, const Eigen::Ve
   return id;
 }
 
+// The component in its own Context with the laser mount from parameters (nobody publishes TF for `base_frame`,
+// so after `tf_timeout` of scan time it falls back to sensor_x/y/yaw), and a "sim" node in another Context
+// (so over DDS) publishing scans and odometry and hearing people/tracks.
+struct FallbackMountRig {
+  cairn::ComponentLoader loader;
+  std::shared_ptr<cairn::Context> ctx = cairn::Context::create(), sim_ctx = cairn::Context::create();
+  cairn::Executor exec, sim_exec;
+  std::unique_ptr<cairn::ComponentManager> mgr;
+  std::unique_ptr<Spinner> spinner, sim_spinner;
+  std::unique_ptr<cairn::Node> sim;
+  Heard heard;
+  std::shared_ptr<cairn::Publisher<sensor_msgs::msg::LaserScan>> scan_pub;
+  std::shared_ptr<cairn::Publisher<nav_msgs::msg::Odometry>> odom_pub;
+  std::shared_ptr<cairn::Subscription<pmsg::TrackedPersons>> tracks_sub;
+  double tf_timeout;
+
+  // Loads the component (ASSERTs inside: call through ASSERT_NO_FATAL_FAILURE(rig.start(...))).
+  void start(const std::string& container, const World& world, double tf_timeout_s,
+             const std::map<std::string, std::string>& extra = {}) {
+    tf_timeout = tf_timeout_s;
+    mgr = std::make_unique<cairn::ComponentManager>(ctx, exec, container, loader);
+    cairn::LoadRequest req{"cairn_people_tracking::PeopleTracker", "people_tracker"};
+    req.parameters["tf_timeout"] = tf_timeout_s;
+    req.parameters["base_frame"] = std::string("base_footprint");  // nobody publishes it, whatever is on /tf_static
+    req.parameters["sensor_x"] = world.mount.x;
+    req.parameters["sensor_y"] = world.mount.y;
+    req.parameters["sensor_yaw"] = world.mount.theta;
+    for (const auto& [k, v] : extra) req.parameters[k] = v;
+    const auto loaded = mgr->load(req);
+    ASSERT_TRUE(loaded.ok) << loaded.error;
+    spinner = std::make_unique<Spinner>(exec);
+    cairn::NodeOptions o("sim", &sim_exec);
+    o.context = sim_ctx;
+    o.start_parameter_services = false;
+    sim = std::make_unique<cairn::Node>(o);
+    scan_pub = sim->create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS{});
+    odom_pub = sim->create_publisher<nav_msgs::msg::Odometry>("odom", cairn::QoS{});
+    tracks_sub = sim->create_subscription<pmsg::TrackedPersons>("people/tracks", cairn::QoS{}, [this](const pmsg::TrackedPersons& m) {
+      std::lock_guard l(heard.mu);
+      heard.tracks[key(m.header.stamp)] = m;
+    });
+    sim_spinner = std::make_unique<Spinner>(sim_exec);
+    ASSERT_TRUE(waitFor([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s));
+    ASSERT_TRUE(waitFor([&] { return tracks_sub->publisher_count_inter_process() > 0; }, 20s));
+  }
+  // Scans and odometry of `world` at t0 + k dt (k < steps), each after the reply to the previous one (reliable
+  // and in order); scans within the TF timeout get no reply, so their wait is short.
+  void play(World& world, double t0, int steps, double dt) {
+    for (int k = 0; k < steps; ++k) {
+      const double t = t0 + k * dt;
+      pt::LaserScan s = world.scanAt(k * dt, dt);
+      s.stamp = t;
+      auto odom = world.odomAt(k * dt);
+      odom.header.stamp = stampOf(t);
+      odom_pub->publish(odom);
+      scan_pub->publish(toMsg(s));
+      waitFor([&] {
+        std::lock_guard l(heard.mu);
+        return heard.tracks.count(key(stampOf(t))) > 0;
+      }, k * dt < tf_timeout + 0.1 ? 200ms : 5s);
+    }
+  }
+  ~FallbackMountRig() {
+    if (sim_spinner) sim_spinner->stop();
+    if (spinner) spinner->stop();
+  }
+};
+
 }  // namespace
 
 TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMasksTheGuide) {
@@ -316,55 +384,14 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
 // Without TF the component skips scans for tf_timeout seconds of scan time, then uses sensor_x/y/yaw.
 TEST(PeopleTrackerComponent, LaserMountFallsBackToParametersWhenNoTfArrives) {
   World world;
-  auto ctx = cairn::Context::create();
-  cairn::Executor exec;
-  cairn::ComponentLoader loader;
-  cairn::ComponentManager mgr(ctx, exec, "people_container3", loader);
-  cairn::LoadRequest req{"cairn_people_tracking::PeopleTracker", "people_tracker"};
-  req.parameters["tf_timeout"] = 0.5;
-  req.parameters["base_frame"] = std::string("base_footprint");  // nobody publishes it, whatever is on /tf_static
-  req.parameters["sensor_x"] = world.mount.x;
-  req.parameters["sensor_y"] = world.mount.y;
-  req.parameters["sensor_yaw"] = world.mount.theta;
-  const auto loaded = mgr.load(req);
-  ASSERT_TRUE(loaded.ok) << loaded.error;
-  Spinner spinner(exec);
-
-  auto sim_ctx = cairn::Context::create();
-  cairn::Executor sim_exec;
-  cairn::NodeOptions o("sim", &sim_exec);
-  o.context = sim_ctx;
-  o.start_parameter_services = false;
-  cairn::Node sim(o);
-  Heard heard;
-  auto scan_pub = sim.create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS{});
-  auto odom_pub = sim.create_publisher<nav_msgs::msg::Odometry>("odom", cairn::QoS{});
-  auto tracks_sub = sim.create_subscription<pmsg::TrackedPersons>("people/tracks", cairn::QoS{}, [&](const pmsg::TrackedPersons& m) {
-    std::lock_guard l(heard.mu);
-    heard.tracks[key(m.header.stamp)] = m;
-  });
-  Spinner sim_spinner(sim_exec);
-  ASSERT_TRUE(waitFor([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s));
-  ASSERT_TRUE(waitFor([&] { return tracks_sub->publisher_count_inter_process() > 0; }, 20s));
-
+  FallbackMountRig rig;
+  ASSERT_NO_FATAL_FAILURE(rig.start("people_container3", world, 0.5));
   const double dt = 1.0 / 15.0;
   const int steps = 30;
-  for (int k = 0; k < steps; ++k) {
-    const double t = 200.0 + k * dt;
-    pt::LaserScan s = world.scanAt(k * dt, dt);
-    s.stamp = t;
-    auto odom = world.odomAt(k * dt);
-    odom.header.stamp = stampOf(t);
-    odom_pub->publish(odom);
-    scan_pub->publish(toMsg(s));
-    // Reliable and in order: the reply to a processed scan arrives before the next scan is sent.
-    waitFor([&] {
-      std::lock_guard l(heard.mu);
-      return heard.tracks.count(key(stampOf(t))) > 0;
-    }, k * dt < 0.5 ? 200ms : 5s);
-  }
-  sim_spinner.stop();
-  spinner.stop();
+  rig.play(world, 200.0, steps, dt);
+  rig.sim_spinner->stop();
+  rig.spinner->stop();
+  Heard& heard = rig.heard;
   std::lock_guard l(heard.mu);
   int matched = 0, processed = 0;
   for (int k = 0; k < steps; ++k) {
@@ -477,39 +504,12 @@ TEST(PeopleTrackerComponent, StaticMapDropsLegsOnMappedCells) {
   auto run = [&](bool with_map, int& on_posts, int& on_a) {
     World world;
     world.static_legs = posts;
-    auto ctx = cairn::Context::create();
-    cairn::Executor exec;
-    cairn::ComponentLoader loader;
-    cairn::ComponentManager mgr(ctx, exec, with_map ? "people_container5" : "people_container4", loader);
-    cairn::LoadRequest req{"cairn_people_tracking::PeopleTracker", "people_tracker"};
-    req.parameters["tf_timeout"] = 0.2;
-    req.parameters["base_frame"] = std::string("base_footprint");  // mount from the parameters below
-    req.parameters["sensor_x"] = world.mount.x;
-    req.parameters["sensor_y"] = world.mount.y;
-    req.parameters["sensor_yaw"] = world.mount.theta;
-    if (with_map) req.parameters["static_map.topic"] = std::string("map");
-    const auto loaded = mgr.load(req);
-    ASSERT_TRUE(loaded.ok) << loaded.error;
-    Spinner spinner(exec);
-
-    auto sim_ctx = cairn::Context::create();
-    cairn::Executor sim_exec;
-    cairn::NodeOptions o("sim", &sim_exec);
-    o.context = sim_ctx;
-    o.start_parameter_services = false;
-    cairn::Node sim(o);
-    Heard heard;
-    auto scan_pub = sim.create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS{});
-    auto odom_pub = sim.create_publisher<nav_msgs::msg::Odometry>("odom", cairn::QoS{});
-    auto map_pub = sim.create_publisher<nav_msgs::msg::OccupancyGrid>("map", cairn::QoS::latched());
-    auto tracks_sub = sim.create_subscription<pmsg::TrackedPersons>("people/tracks", cairn::QoS{}, [&](const pmsg::TrackedPersons& m) {
-      std::lock_guard l(heard.mu);
-      heard.tracks[key(m.header.stamp)] = m;
-    });
-    Spinner sim_spinner(sim_exec);
-    ASSERT_TRUE(waitFor([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s));
-    ASSERT_TRUE(waitFor([&] { return tracks_sub->publisher_count_inter_process() > 0; }, 20s));
+    FallbackMountRig rig;
+    std::map<std::string, std::string> extra;
+    if (with_map) extra["static_map.topic"] = "map";
+    ASSERT_NO_FATAL_FAILURE(rig.start(with_map ? "people_container5" : "people_container4", world, 0.2, extra));
     if (with_map) {
+      auto map_pub = rig.sim->create_publisher<nav_msgs::msg::OccupancyGrid>("map", cairn::QoS::latched());
       // 40 x 40 cells of 5 cm; origin at (6, 2) turned by +90 deg: cell (i, j) centre = (6 - (j + 0.5) r, 2 + (i + 0.5) r).
       nav_msgs::msg::OccupancyGrid grid;
       grid.header.frame_id = "odom";
@@ -531,21 +531,10 @@ TEST(PeopleTrackerComponent, StaticMapDropsLegsOnMappedCells) {
     }
     const double dt = 1.0 / 15.0;
     const int steps = 45;
-    for (int k = 0; k < steps; ++k) {
-      const double t = 300.0 + k * dt;
-      pt::LaserScan s = world.scanAt(k * dt, dt);
-      s.stamp = t;
-      auto odom = world.odomAt(k * dt);
-      odom.header.stamp = stampOf(t);
-      odom_pub->publish(odom);
-      scan_pub->publish(toMsg(s));
-      waitFor([&] {
-        std::lock_guard l(heard.mu);
-        return heard.tracks.count(key(stampOf(t))) > 0;
-      }, k * dt < 0.3 ? 200ms : 5s);  // the first scans wait for the TF timeout (0.2 s of scan time)
-    }
-    sim_spinner.stop();
-    spinner.stop();
+    rig.play(world, 300.0, steps, dt);
+    rig.sim_spinner->stop();
+    rig.spinner->stop();
+    Heard& heard = rig.heard;
     std::lock_guard l(heard.mu);
     for (int k = 15; k < steps; ++k) {
       const auto it = heard.tracks.find(key(stampOf(300.0 + k * dt)));
