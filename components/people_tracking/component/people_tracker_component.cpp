@@ -277,7 +277,7 @@ class PeopleTracker : public cairn::Node {
     for (std::size_t i = 0; i < m.data.size(); ++i) map->occupied[i] = m.data[i] >= static_map_threshold_ ? 1 : 0;
     const auto& q = m.info.origin.orientation;
     const double yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
-    grid_from_map_ = inverse(pt::Pose2{m.info.origin.position.x, m.info.origin.position.y, yaw});
+    grid_from_map_ = pt::Pose2{m.info.origin.position.x, m.info.origin.position.y, yaw}.inverse();
     map_frame_ = m.header.frame_id;
     static_map_ = std::move(map);
   }
@@ -299,16 +299,8 @@ class PeopleTracker : public cairn::Node {
         return;
       }
     }
-    static_map_->map_from_tracking = compose(grid_from_map_, map_from_tracking);
+    static_map_->map_from_tracking = grid_from_map_ * map_from_tracking;
     tracker_->setStaticMap(static_map_);
-  }
-  static pt::Pose2 compose(const pt::Pose2& a, const pt::Pose2& b) {
-    const Eigen::Vector2d t = a.transform({b.x, b.y});
-    return pt::Pose2{t.x(), t.y(), wrapAngle(a.theta + b.theta)};
-  }
-  static pt::Pose2 inverse(const pt::Pose2& a) {
-    const Eigen::Vector2d t = -(a.rotation().transpose() * Eigen::Vector2d(a.x, a.y));
-    return pt::Pose2{t.x(), t.y(), wrapAngle(-a.theta)};
   }
 
   // At most one warning per key and second, with the number of suppressed repeats.
@@ -426,8 +418,8 @@ class PeopleTracker : public cairn::Node {
         warn("scan_no_odom", "scan at " + std::to_string(scan.stamp) + ": " + why + ", scan ignored");
         return;
       }
-      const Eigen::Vector2d p = robot->transform({mount_.x, mount_.y});
-      sensor = pt::Pose2{p.x(), p.y(), wrapAngle(robot->theta + mount_.theta)};
+      sensor = *robot * mount_;
+      sensor.theta = wrapAngle(sensor.theta);
     } else {
       sensor = pt::Pose2{};  // tracking frame = laser frame
     }

@@ -38,4 +38,14 @@ Eigen::Vector2d Pose2::inverseTransform(const Eigen::Vector2d& p) const {
   return rotation().transpose() * (p - Eigen::Vector2d(x, y));
 }
 
+Pose2 Pose2::operator*(const Pose2& local) const {
+  const Eigen::Vector2d p = transform({local.x, local.y});
+  return Pose2{p.x(), p.y(), theta + local.theta};
+}
+
+Pose2 Pose2::inverse() const {
+  const Eigen::Vector2d p = inverseTransform(Eigen::Vector2d::Zero());
+  return Pose2{p.x(), p.y(), -theta};
+}
+
 }  // namespace cairn::people_tracking

@@ -92,9 +92,7 @@ struct World {
     return pt::Pose2{robot_v / robot_w * std::sin(th), robot_v / robot_w * (1 - std::cos(th)), th};
   }
   pt::Pose2 laserPose(double t) const {
-    const pt::Pose2 r = robot(t);
-    const Eigen::Vector2d p = r.transform({mount.x, mount.y});
-    return pt::Pose2{p.x(), p.y(), r.theta + mount.theta};
+    return robot(t) * mount;
   }
   tf2_msgs::msg::TFMessage mountTf() const {
     geometry_msgs::msg::TransformStamped m;

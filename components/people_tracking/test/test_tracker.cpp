@@ -492,3 +492,14 @@ TEST(StaticMap, LegsOnTheMapNeitherStartNorFeedTracks) {
   EXPECT_GT(walker_without, 30);
   EXPECT_EQ(walker_with, walker_without);
 }
+
+TEST(Pose2, CompositionAndInverseAgreeWithPointTransforms) {
+  const Pose2 a{1.0, -2.0, 0.7}, b{0.3, 0.4, -1.9};
+  const Eigen::Vector2d p(0.25, -1.5);
+  EXPECT_TRUE((a * b).transform(p).isApprox(a.transform(b.transform(p)), 1e-12));
+  EXPECT_TRUE(a.inverse().transform(a.transform(p)).isApprox(p, 1e-12));
+  const Pose2 id = a * a.inverse();
+  EXPECT_NEAR(id.x, 0.0, 1e-12);
+  EXPECT_NEAR(id.y, 0.0, 1e-12);
+  EXPECT_NEAR(id.theta, 0.0, 1e-12);
+}

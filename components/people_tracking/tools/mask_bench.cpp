@@ -209,8 +209,7 @@ MaskBenchResult runMaskBench(const MaskBenchParams& p) {
 
       LaserScan ls = fromSimScan(scan);
       const Pose2 base{o.x, o.y, o.theta};
-      const Eigen::Vector2d lp = base.transform({mount.x, mount.y});
-      const Pose2 sensor{lp.x(), lp.y(), o.theta + mount.theta};
+      const Pose2 sensor = base * Pose2{mount.x, mount.y, mount.theta};
       tracker.updateLegs(scan.stamp, detector.detectLegs(ls), sensor, detector.params(), &ls);
       const std::vector<Track> tracks = tracker.outputTracks();
       if (guider.state() == GuideState::kSearch) guider.selectClosestInFront(tracks, sensor, scan.stamp);

@@ -43,6 +43,9 @@ struct Pose2 {
   [[nodiscard]] Eigen::Vector2d transform(const Eigen::Vector2d& p) const;         // local -> frame
   [[nodiscard]] Eigen::Vector2d inverseTransform(const Eigen::Vector2d& p) const;  // frame -> local
   [[nodiscard]] Eigen::Matrix2d rotation() const;
+  // Composition: (this * local) is the pose `local` (given in this pose's frame) in this pose's parent frame.
+  [[nodiscard]] Pose2 operator*(const Pose2& local) const;
+  [[nodiscard]] Pose2 inverse() const;
 };
 
 }  // namespace cairn::people_tracking
