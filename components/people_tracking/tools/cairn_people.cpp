@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "cairn/people_tracking/classifier.hpp"
-#include "cli_number.hpp"
+#include "cli_parse.hpp"
 #include "tool_bench.hpp"
 #include "mask_bench.hpp"
 #ifdef CAIRN_PEOPLE_SIM
@@ -118,15 +118,7 @@ std::vector<LabelledCluster> loadData(const std::string& list) {
 int genTrain(const Args& a) {
   SimTrainingParams p;
   const std::string worlds = a.get("worlds", "");
-  if (!worlds.empty()) {
-    p.worlds.clear();
-    std::size_t begin = 0;
-    while (begin <= worlds.size()) {
-      const std::size_t end = std::min(worlds.find(',', begin), worlds.size());
-      p.worlds.push_back(worlds.substr(begin, end - begin));
-      begin = end + 1;
-    }
-  }
+  if (!worlds.empty()) p.worlds = splitCommas(worlds);
   p.episodes = static_cast<int>(toLong(a, "episodes", p.episodes));
   p.seed = static_cast<std::uint64_t>(toLong(a, "seed", 1));
   p.scans_per_episode = static_cast<int>(toLong(a, "scans-per-episode", p.scans_per_episode));

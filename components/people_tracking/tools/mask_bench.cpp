@@ -10,7 +10,7 @@
 // or the simulator.
 #include "mask_bench.hpp"
 
-#include "cli_number.hpp"
+#include "cli_parse.hpp"
 
 #include <cmath>
 #include <cstdio>

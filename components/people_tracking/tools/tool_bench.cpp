@@ -1,13 +1,12 @@
 #include "tool_bench.hpp"
 
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <vector>
 
 #include "cairn/people_tracking/bench.hpp"
-#include "cli_number.hpp"
+#include "cli_parse.hpp"
 #ifdef CAIRN_PEOPLE_SIM
 #include <memory>
 
@@ -76,12 +75,7 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--trajectory-offset") {  // x,y[,theta]: world = offset (+) data
       const std::string v = value();
       std::vector<double> xyt;
-      for (std::size_t begin = 0;;) {
-        const std::size_t end = v.find(',', begin);
-        xyt.push_back(number(v.substr(begin, end == std::string::npos ? std::string::npos : end - begin)));
-        if (end == std::string::npos) break;
-        begin = end + 1;
-      }
+      for (const std::string& field : splitCommas(v)) xyt.push_back(number(field));
       if (xyt.size() < 2 || xyt.size() > 3) throw InputError("--trajectory-offset expects x,y or x,y,theta, got '" + v + "'");
       p.trajectory_offset = Pose2{xyt[0], xyt[1], xyt.size() == 3 ? xyt[2] : 0.0};
     }

@@ -1,9 +1,10 @@
-// One parser for the numeric command-line options of the `cairn people` verbs.
+// Parsers shared by the `cairn people` verbs' command-line options: numbers and comma-separated lists.
 #pragma once
 
 #include <cmath>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "cairn/people_tracking/scan.hpp"  // InputError
 
@@ -16,6 +17,17 @@ inline double parseNumber(const std::string& option, const std::string& text) {
   if (text.empty() || *end != '\0') throw InputError("option " + option + " expects a number, got '" + text + "'");
   if (!std::isfinite(x)) throw InputError("option " + option + " expects a finite number, got '" + text + "'");
   return x;
+}
+
+// "a,b,c" -> {"a", "b", "c"}; every field is kept, empty ones too ("" -> {""}, "a," -> {"a", ""}).
+inline std::vector<std::string> splitCommas(const std::string& text) {
+  std::vector<std::string> out;
+  for (std::size_t begin = 0;;) {
+    const std::size_t end = text.find(',', begin);
+    out.push_back(text.substr(begin, end == std::string::npos ? std::string::npos : end - begin));
+    if (end == std::string::npos) return out;
+    begin = end + 1;
+  }
 }
 
 }  // namespace cairn::people_tracking
