@@ -458,15 +458,15 @@ void PeopleTracker::reidentify(std::size_t new_track) {
   Track& n = tracks_[new_track];
   double best = std::numeric_limits<double>::infinity();
   std::size_t best_k = deleted_.size();
+  // Deleted tracks are predicted with the walking process noise only (the manoeuvre mode's covariance grows so
+  // fast over seconds that its gate would take anyone).
+  TrackerParams walking = params_;
+  walking.maneuver_process_noise = 0.0;
   for (std::size_t k = 0; k < deleted_.size(); ++k) {
     if (last_stamp_ - deleted_[k].deleted > params_.reid_window) continue;
-    // The deleted track's constant-velocity prediction with the walking process noise only (the manoeuvre
-    // mode's covariance grows so fast over seconds that its gate would take anyone).
     Track old = deleted_[k].track;
     old.mode_state[0] = old.state;
     old.mode_covariance[0] = old.covariance;
-    TrackerParams walking = params_;
-    walking.maneuver_process_noise = 0.0;
     predictTrack(old, last_stamp_, walking);
     const Eigen::Vector2d nu = n.position() - old.position();
     const Eigen::Matrix2d S = old.positionCovariance() + n.positionCovariance();
