@@ -215,10 +215,12 @@ struct FallbackMountRig {
       }, k * dt < tf_timeout + 0.1 ? 200ms : 5s);
     }
   }
-  ~FallbackMountRig() {
+  // Stops both executors: afterwards `heard` no longer changes.
+  void stop() {
     if (sim_spinner) sim_spinner->stop();
     if (spinner) spinner->stop();
   }
+  ~FallbackMountRig() { stop(); }
 };
 
 }  // namespace
@@ -387,8 +389,7 @@ TEST(PeopleTrackerComponent, LaserMountFallsBackToParametersWhenNoTfArrives) {
   const double dt = 1.0 / 15.0;
   const int steps = 30;
   rig.play(world, 200.0, steps, dt);
-  rig.sim_spinner->stop();
-  rig.spinner->stop();
+  rig.stop();
   Heard& heard = rig.heard;
   std::lock_guard l(heard.mu);
   int matched = 0, processed = 0;
@@ -530,8 +531,7 @@ TEST(PeopleTrackerComponent, StaticMapDropsLegsOnMappedCells) {
     const double dt = 1.0 / 15.0;
     const int steps = 45;
     rig.play(world, 300.0, steps, dt);
-    rig.sim_spinner->stop();
-    rig.spinner->stop();
+    rig.stop();
     Heard& heard = rig.heard;
     std::lock_guard l(heard.mu);
     for (int k = 15; k < steps; ++k) {
