@@ -5,6 +5,9 @@
 
 1. A scripted dump with two people walking side by side 0.8 m apart: at t = 0.5 s person 1's track moves onto
    person 2 and person 1 gets a new track, person 2's own track is deleted. Two switches with known classes.
+   Both are "group" (walking together), neither is mutual.
+1b. A scripted crossing: two people pass each other 0.6 m apart in opposite directions and their tracks trade
+   people: two "crossing" switches, both mutual.
 2. --by-range bands on a scripted dump (two people at 1 m and 5 m, legs and one switch known).
 3. The switches a real `cairn people bench --dump` lists in matches.csv are the bench's id_switches, and the
    dump has what --by-range needs.
@@ -39,6 +42,22 @@ def scripted(d):
             matches += [(t, 1, 10, -1), (t, 2, 20, -1)]
         else:  # the scorer's view: person 1 switched 10 -> 30, person 2 switched 20 -> 10 (at k = 5 only)
             matches += [(t, 1, 30, 10 if k == 5 else -1), (t, 2, 10, 20 if k == 5 else -1)]
+    write(d + "/groundtruth.csv", "t,id,x,y", gt)
+    write(d + "/matches.csv", "t,person,track,switched_from", matches)
+    write(d + "/tracker_state.csv", "t,id,x,y,vx,vy,confirmed,coast_s,visibility", state)
+
+
+def crossing(d):
+    gt, matches, state = [], [], []
+    for k in range(21):
+        t = round(0.1 * k, 1)
+        a, b = (-1.0 + 0.1 * k, 0.0), (1.0 - 0.1 * k, 0.6)
+        gt += [(t, 1, *a), (t, 2, *b)]
+        on = {10: a, 20: b} if k < 10 else {10: b, 20: a}
+        for i, p in on.items():
+            state.append((t, i, *p, 1.0, 0.0, 1, 0, 0))
+        first = k == 10
+        matches += [(t, 1, 10 if k < 10 else 20, 10 if first else -1), (t, 2, 20 if k < 10 else 10, 20 if first else -1)]
     write(d + "/groundtruth.csv", "t,id,x,y", gt)
     write(d + "/matches.csv", "t,person,track,switched_from", matches)
     write(d + "/tracker_state.csv", "t,id,x,y,vx,vy,confirmed,coast_s,visibility", state)
@@ -82,6 +101,12 @@ def main():
                   f"scripted person 2: {b}")
             check(all(s["early"] and s["young"] and s["group"] for s in sw), f"scripted flags: {sw}")
             check(abs(a["nearest"] - 0.8) < 1e-9, f"scripted nearest: {a['nearest']}")
+            check(all(s["situation"] == "group" and not s["mutual"] for s in sw), f"scripted situation: {sw}")
+    with tempfile.TemporaryDirectory() as d:
+        crossing(d)
+        sw = switch_analysis.analyse(d)
+        check(len(sw) == 2 and all(s["situation"] == "crossing" and s["mutual"] for s in sw),
+              f"crossing: expected two mutual crossing switches, got {sw}")
     with tempfile.TemporaryDirectory() as d:
         range_dump(d)
         sw = switch_analysis.analyse(d)

@@ -13,6 +13,10 @@ with the switched-from track, so the switches are exactly the bench's id_switche
   old track: confirmed < 3 s before the switch ("young"), and whether another person was within 1 m when it was
     confirmed ("born in a group").
   gap: how long the person had been unmatched (a miss) before the switch (0.1 s = matched in the previous scan).
+  situation: the nearest other counted person within +-1 s of the switch: "group" if closer than 1.2 m and
+    walking with it (velocities, over +-0.5 s, differ by less than 0.5 m/s), "crossing" if closer than 1.2 m
+    otherwise, "alone" if nobody came that close ("unknown": too few samples for a velocity);
+  mutual: another person switched the other way (B -> A) within 1.5 s (two tracks traded people).
 --list prints one line per switch (t, person, A, B, classes, nearest other person in m).
 --by-range (needs robot.csv and legs.csv in the dump) prints, per band of distance from the sensor, the counted
   person-scans, the switches and switches per 10 000 person-scans, and how often a counted person has a leg
@@ -24,6 +28,9 @@ import math
 import sys
 
 THRESHOLD = 0.5  # m, the bench's match threshold (for "alive_far")
+NEIGHBOUR = 1.2  # m, "group"/"crossing": another person came this close within +-1 s of the switch
+WITH = 0.5  # m/s, "group": velocity difference below this
+MUTUAL = 1.5  # s, window for a mirrored switch
 
 
 def by_time(path):
@@ -73,7 +80,48 @@ def analyse(d):
         for g, h in match.items():
             on_person[h].add(g)
             last_matched[g] = t
+    situations(gt, out)
+    for s in out:
+        s["mutual"] = any(o is not s and abs(o["t"] - s["t"]) <= MUTUAL and o["old"] == s["new_id"] and
+                          o["new_id"] == s["old"] for o in out)
     return out
+
+
+def situations(gt, switches):
+    """Sets s["situation"] (see the module docstring) from the counted people's positions around each switch."""
+    pos = {(t, int(r["id"])): (float(r["x"]), float(r["y"])) for t, rows in gt.items() for r in rows}
+    times = sorted(gt)
+
+    def window(t, half):
+        return [u for u in times if abs(u - t) <= half + 1e-6]
+
+    def velocity(g, t):
+        pts = [(u, pos[(u, g)]) for u in window(t, 0.5) if (u, g) in pos]
+        if len(pts) < 2 or pts[-1][0] - pts[0][0] < 0.25:
+            return None
+        (ta, a), (tb, b) = pts[0], pts[-1]
+        return ((b[0] - a[0]) / (tb - ta), (b[1] - a[1]) / (tb - ta))
+
+    for s in switches:
+        g, best = s["person"], (float("inf"), None, None)
+        for u in window(s["t"], 1.0):
+            if (u, g) not in pos:
+                continue
+            x, y = pos[(u, g)]
+            for r in gt[u]:
+                h = int(r["id"])
+                d = math.hypot(float(r["x"]) - x, float(r["y"]) - y)
+                if h != g and d < best[0]:
+                    best = (d, h, u)
+        d, h, u = best
+        if d >= NEIGHBOUR:
+            s["situation"] = "alone"
+            continue
+        va, vb = velocity(g, u), velocity(h, u)
+        if va is None or vb is None:
+            s["situation"] = "unknown"
+        else:
+            s["situation"] = "group" if math.hypot(va[0] - vb[0], va[1] - vb[1]) < WITH else "crossing"
 
 
 BANDS = (2.0, 4.0, 6.0, 8.0)  # m, upper edges of the distance bands of --by-range (the bench counts up to 8 m)
@@ -125,7 +173,8 @@ def main():
         if "--list" in sys.argv:
             for s in sw:
                 print(f"{d}: t={s['t']:.2f} person {s['person']}: {s['old']} -> {s['new_id']} "
-                      f"{s['old_class']}/{s['new_class']} nearest {s['nearest']:.2f} m")
+                      f"{s['old_class']}/{s['new_class']} {s['situation']}{' mutual' if s['mutual'] else ''} "
+                      f"nearest {s['nearest']:.2f} m")
     n = len(allsw)
     print(f"switches: {n} in {len(dirs)} runs")
     for key in ("old_class", "new_class"):
@@ -139,6 +188,9 @@ def main():
                                if s["gap"] < 0.55 else "unmatched 0.6-1.5 s" if s["gap"] < 1.55 else
                                "unmatched > 1.5 s" for s in allsw)
     print("  person before the switch: " + ", ".join(f"{k} {v}" for k, v in gaps.most_common()))
+    c = collections.Counter(s["situation"] for s in allsw)
+    print("  situation: " + ", ".join(f"{k} {v}" for k, v in c.most_common()) +
+          f"; in mutual swaps (two tracks traded people): {sum(s['mutual'] for s in allsw)}")
     if "--by-range" in sys.argv:
         print("| distance | person-scans | switches | per 10k | leg >= 0.5 | two legs >= 0.5 | leg >= 0.2 |")
         print("|---|---|---|---|---|---|---|")
