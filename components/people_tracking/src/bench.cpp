@@ -136,6 +136,8 @@ BenchResult runBench(const BenchParams& params) {
     throw InputError("world '" + params.world + "': only --world auto without the simulator component (cairn-people "
                      "built with components/sim reads its worlds)");
   if (!(params.scan_rate > 0.0)) throw InputError("scan rate must be positive");
+  if (!params.laser_fov_set && (params.laser_beams < 8 || params.laser_beams > 100000))
+    throw InputError("--beams must be an integer in [8, 100000], got " + std::to_string(params.laser_beams));
   if (params.oracle_detections && !(params.oracle_sigma > 0.0 && params.oracle_sigma < 10.0))
     throw InputError("oracle sigma must be in (0, 10) m");
   const TrajectorySet traj = loadTrajectories(params.trajectories);
@@ -167,9 +169,9 @@ BenchResult runBench(const BenchParams& params) {
 
   LaserModel laser = params.laser;
   if (!params.laser_fov_set) {
-    laser.beams = 1080;
+    laser.beams = static_cast<std::size_t>(params.laser_beams);
     laser.angle_min = -M_PI;
-    laser.angle_increment = 2 * M_PI / 1080;
+    laser.angle_increment = 2 * M_PI / params.laser_beams;
   }
   PeopleTracker tracker(params.tracker);
   NearestNeighbourTracker baseline;
@@ -346,7 +348,9 @@ std::string benchJson(const BenchParams& p, const BenchResult& r) {
     << ", \"association\": \"" << toString(p.tracker.association) << "\", \"scan_rate\": " << p.scan_rate
     << ", \"scans\": " << r.scans << ", \"duration_s\": " << r.duration << ", \"people_in_file\": " << r.people_in_file
     << ", \"mean_people_counted\": " << r.mean_people_counted << ", \"match_threshold_m\": " << p.match_threshold
-    << ", \"sensor_range_m\": " << p.sensor_range << ", \"cairn\": " << run(r.cairn)
+    << ", \"sensor_range_m\": " << p.sensor_range;
+  if (!p.laser_fov_set) o << ", \"laser_beams\": " << p.laser_beams;
+  o << ", \"cairn\": " << run(r.cairn)
     << ", \"baseline\": " << run(r.baseline) << ", \"baseline_name\": \"greedy nearest neighbour, no motion model\"}";
   return o.str();
 }

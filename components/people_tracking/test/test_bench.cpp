@@ -27,7 +27,7 @@ TEST(Bench, EthExcerptStaticRobotBeatsBaseline) {
   EXPECT_GT(r.cairn.mot.mota(), r.baseline.mot.mota() + 0.1);
   EXPECT_LT(r.cairn.mot.id_switches, r.baseline.mot.id_switches);
   const std::string json = benchJson(p, r);
-  for (const char* key : {"\"mota\"", "\"motp\"", "\"id_switches\"", "\"fp\"", "\"fn\"", "\"scans_per_second\"", "\"baseline\""})
+  for (const char* key : {"\"mota\"", "\"motp\"", "\"id_switches\"", "\"fp\"", "\"fn\"", "\"scans_per_second\"", "\"baseline\"", "\"laser_beams\": 1080"})
     EXPECT_NE(json.find(key), std::string::npos) << key;
 }
 
@@ -67,6 +67,19 @@ TEST(Bench, OracleDetectionsScoreTheTrackerAlone) {
   EXPECT_LT(oracle.cairn.mot.fn, legs.cairn.mot.fn);
   EXPECT_GT(oracle.cairn.mot.mota(), legs.cairn.mot.mota());
   EXPECT_LT(oracle.cairn.mot.motp(), 0.08);  // 5 cm noise per axis: mean error about 6 cm
+}
+
+// --beams: the 360 deg scan's resolution. Half the beams (0.67 deg) leave fewer people hit by the 3 beams that
+// make them count, and the tracker finds fewer of those it counts.
+TEST(Bench, CoarserLaserCountsFewerPeopleAndTracksWorse) {
+  BenchParams p = excerpt();
+  const BenchResult fine = runBench(p);
+  p.laser_beams = 540;
+  const BenchResult coarse = runBench(p);
+  EXPECT_LT(coarse.mean_people_counted, fine.mean_people_counted);
+  EXPECT_LT(coarse.cairn.mot.mota(), fine.cairn.mot.mota());
+  p.laser_beams = 4;
+  EXPECT_THROW(runBench(p), InputError);
 }
 
 TEST(Bench, BadInputs) {

@@ -1,5 +1,6 @@
 #include "tool_bench.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -55,6 +56,13 @@ int runBenchVerb(int argc, char** argv) {
     }
     else if (a == "--leg-spread") p.tracker.leg_spread_sigma = number(value());
     else if (a == "--leg-spread-lateral") p.tracker.leg_spread_lateral_sigma = number(value());
+    else if (a == "--beams") {
+      const std::string v = value();
+      const double b = number(v);
+      if (b != std::floor(b) || b < 8 || b > 100000)
+        throw InputError("option --beams expects an integer in [8, 100000], got '" + v + "'");
+      p.laser_beams = static_cast<int>(b);
+    }
     else if (a == "--leg-gate") p.tracker.leg_gate_chi2 = number(value());
     else if (a == "--reid-window") p.tracker.reid_window = number(value());
     else if (a == "--publish-coast") p.tracker.publish_coast_time = number(value());

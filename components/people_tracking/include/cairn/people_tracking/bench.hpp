@@ -40,8 +40,9 @@ struct BenchParams {
   bool oracle_detections = false;
   double oracle_sigma = 0.05;  // m
   DetectorParams detector{};
-  LaserModel laser{};          // runBench sets a 360 deg scan unless laser_fov_set
+  LaserModel laser{};          // runBench sets a 360 deg scan of laser_beams beams unless laser_fov_set
   bool laser_fov_set = false;
+  int laser_beams = 1080;      // 0.333 deg (`--beams`; 720 = 0.5 deg, SICK S300 class; 1440 = 0.25 deg)
   double sensor_range = 8.0;   // m, people farther away do not count (Yuan's 8 m field)
   int min_visible_beams = 3;   // line of sight: at least this many beams hit the person's legs
   double match_threshold = 0.5;
