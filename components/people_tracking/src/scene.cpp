@@ -233,15 +233,26 @@ Scene randomTrainingScene(std::mt19937_64& rng, const TrainingSceneParams& param
     scene.addCircle(place(0.8, params.max_distance), uni(0.1, 0.3), ObjectClass::kPole);
   for (int i = count(params.max_clutter); i > 0; --i)
     scene.addBox(place(0.8, params.max_distance), uni(0.05, 0.5), uni(0.05, 0.4), uni(0, M_PI), ObjectClass::kClutter);
-  for (int i = count(params.max_people), pid = 0; i > 0; --i, ++pid) {
-    WalkerState w;
-    w.position = place(0.6, params.max_distance);
-    w.heading = uni(-M_PI, M_PI);
+  auto body = [&](WalkerState& w) {
     w.gait_phase = uni(0, 2 * M_PI);
     w.stride_amplitude = U(rng) < 0.3 ? uni(0.0, 0.05) : uni(0.1, 0.3);
     w.hip_half_width = uni(0.07, 0.13);
     w.leg_radius = uni(0.05, 0.08);
-    addWalker(scene, w, pid);
+  };
+  int pid = 0;
+  for (int i = count(params.max_people); i > 0; --i) {
+    WalkerState w;
+    w.position = place(0.6, params.max_distance);
+    w.heading = uni(-M_PI, M_PI);
+    body(w);
+    addWalker(scene, w, pid++);
+    if (params.group_probability > 0.0 && U(rng) < params.group_probability) {  // a companion beside w
+      WalkerState c = w;
+      const double side = U(rng) < 0.5 ? -1.0 : 1.0;
+      c.position += side * uni(0.45, 0.8) * Eigen::Vector2d(-std::sin(w.heading), std::cos(w.heading));
+      body(c);
+      addWalker(scene, c, pid++);
+    }
   }
   return scene;
 }

@@ -21,6 +21,7 @@ expect_error("cairn people: bad_tracks.csv:3:" bench --world auto --trajectories
 expect_error("no_such_file.txt" bench --world auto --trajectories no_such_file.txt)
 expect_error("model file not found: /no/such/model.yml" eval --model /no/such/model.yml)
 expect_error("unknown verb 'fly'" fly)
+expect_error("option --groups expects a probability in [0, 1], got '1.5'" train --groups 1.5 --out groups.yml)
 expect_error("nowhere" bench --world nowhere --trajectories bad_tracks.csv)
 expect_error("--trajectory-offset" bench --world auto --trajectories bad_tracks.csv --trajectory-offset 1,2)
 expect_error("expects a number, got 'x'" bench --world office --trajectories bad_tracks.csv --trajectory-offset 1,x)

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include "cairn/people_tracking/features.hpp"
 #include "cairn/people_tracking/scene.hpp"
 
@@ -53,6 +55,34 @@ TEST(Scene, RandomScenesAreDeterministicAndMixed) {
   }
   EXPECT_GT(persons, 20);
   EXPECT_GT(others, 100);
+}
+
+// TrainingSceneParams::group_probability 1: every generated person has a companion 0.45-0.8 m beside them (ids 2k
+// and 2k+1); a person's centre is the mean of their two legs.
+TEST(Scene, GroupScenesPairPeopleSideBySide) {
+  TrainingSceneParams params;
+  params.group_probability = 1.0;
+  std::mt19937_64 rng(5);
+  int pairs = 0;
+  for (int k = 0; k < 20; ++k) {
+    const Scene s = randomTrainingScene(rng, params);
+    std::map<int, Eigen::Vector2d> centre;
+    std::map<int, int> legs;
+    for (const SceneCircle& c : s.circles) {
+      const int p = s.object_person[static_cast<std::size_t>(c.object)];
+      if (p < 0) continue;
+      centre[p] = (legs[p]++ ? centre[p] : Eigen::Vector2d::Zero()) + 0.5 * c.center;
+    }
+    ASSERT_EQ(centre.size() % 2, 0u);
+    for (const auto& [p, n] : legs) EXPECT_EQ(n, 2) << "person " << p;
+    for (int p = 0; p + 1 < static_cast<int>(centre.size()); p += 2) {
+      const double d = (centre[p] - centre[p + 1]).norm();
+      EXPECT_GE(d, 0.45 - 1e-9);
+      EXPECT_LE(d, 0.8 + 1e-9);
+      ++pairs;
+    }
+  }
+  EXPECT_GT(pairs, 20);
 }
 
 TEST(Scene, GaitSwingsLegsWhileWalking) {

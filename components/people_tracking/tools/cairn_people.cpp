@@ -80,9 +80,9 @@ double toDouble(const Args& a, const std::string& k, double def) {
 void usage() {
   std::puts(
       "usage: cairn people <verb> [options]\n"
-      "  train --kind adaboost|svm [--features arras14@1|stuede5@1] [--scenes 1500] [--seed 1] [--data CSV[,CSV]]\n"
+      "  train --kind adaboost|svm [--features arras14@1|stuede5@1] [--scenes 1500] [--seed 1] [--groups P] [--data CSV[,CSV]]\n"
       "        [--min-points N] --out FILE\n"
-      "  eval  --model FILE [--scenes 500] [--seed 1000003] [--data CSV] [--json]\n"
+      "  eval  --model FILE [--scenes 500] [--seed 1000003] [--groups P] [--data CSV] [--json]\n"
       "  gen-train [--worlds apartment,office,warehouse,open] [--episodes 200] [--seed 1] [--scans-per-episode 6] [--walker-area 5]\n"
       "            [--max-walkers N] [--scene-generator N] -o FILE\n"
       "  bench --world auto|office|apartment|warehouse|WORLD.yaml --trajectories FILE [--robot-path FILE|circle:R]\n"
@@ -158,6 +158,13 @@ int genTrain(const Args& a) {
 }
 #endif
 
+// --groups P: probability in [0, 1] that a generated person walks with a companion beside them.
+double groupProbability(const Args& a) {
+  const double p = toDouble(a, "groups", 0.0);
+  if (!(p >= 0.0 && p <= 1.0)) fail("option --groups expects a probability in [0, 1], got '" + a.get("groups", "") + "'");
+  return p;
+}
+
 int train(const Args& a) {
   ClassifierTrainParams p;
   p.kind = classifierKindFromString(a.get("kind", "adaboost"));
@@ -171,6 +178,7 @@ int train(const Args& a) {
   d.scenes = static_cast<int>(toLong(a, "scenes", a.has("data") ? 0 : 1500));
   d.seed = static_cast<std::uint64_t>(toLong(a, "seed", 1));
   d.segmentation.min_points = static_cast<int>(toLong(a, "min-points", d.segmentation.min_points));
+  d.scene.group_probability = groupProbability(a);
   const std::string out = a.get("out", "");
   if (out.empty()) fail("train needs --out FILE");
   auto samples = generateLabelledClusters(d);
@@ -195,6 +203,7 @@ int eval(const Args& a) {
   TrainingDataParams d;
   d.scenes = static_cast<int>(toLong(a, "scenes", a.has("data") ? 0 : 500));
   d.seed = static_cast<std::uint64_t>(toLong(a, "seed", 1000003));
+  d.scene.group_probability = groupProbability(a);
   auto samples = generateLabelledClusters(d);
   const std::vector<LabelledCluster> data = loadData(a.get("data", ""));
   samples.insert(samples.end(), data.begin(), data.end());
