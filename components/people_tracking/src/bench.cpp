@@ -137,7 +137,7 @@ BenchResult runBench(const BenchParams& params) {
                      "built with components/sim reads its worlds)");
   if (!(params.scan_rate > 0.0)) throw InputError("scan rate must be positive");
   if (!params.laser_fov_set && (params.laser_beams < 8 || params.laser_beams > 100000))
-    throw InputError("--beams must be an integer in [8, 100000], got " + std::to_string(params.laser_beams));
+    throw InputError("laser_beams (--beams) must be in [8, 100000], got " + std::to_string(params.laser_beams));
   if (params.oracle_detections && !(params.oracle_sigma > 0.0 && params.oracle_sigma < 10.0))
     throw InputError("oracle sigma must be in (0, 10) m");
   const TrajectorySet traj = loadTrajectories(params.trajectories);

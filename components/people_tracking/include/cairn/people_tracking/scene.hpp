@@ -86,7 +86,8 @@ struct TrainingSceneParams {
   int max_poles = 3;
   int max_clutter = 6;
   double max_distance = 9.0;  // m, objects are placed within this range of the sensor
-  // Pedestrians walk in groups (about half of the ETH/UCY people): each person gets a companion side by side
+  // Pedestrians walk in groups (ETH 49 %, hotel 26 %, zara01 70 % of the people walk within 1.2 m of someone at a
+  // similar velocity for >= 2 s, from obsmat.txt): each person gets a companion side by side
   // (same heading, 0.45-0.8 m to the left or right) with this probability. 0 draws nothing extra, so the scenes
   // are those of earlier versions; the shipped AdaBoost model is trained with 0.6 (`train --groups 0.6`).
   double group_probability = 0.0;
