@@ -89,8 +89,8 @@ struct TrainingSceneParams {
   // Pedestrians walk in groups (ETH 49 %, hotel 26 %, zara01 70 % of the people walk within 1.2 m of someone at a
   // similar velocity for >= 2 s, from obsmat.txt): each person gets a companion side by side
   // (same heading, 0.45-0.8 m to the left or right) with this probability. 0 draws nothing extra, so the scenes
-  // are those of earlier versions. No shipped model uses it: trained with 0.6 the model has fewer ID switches on
-  // the open bench but 10x the false positives in the simulator's furnished office (docs/benchmarks.md).
+  // are those of earlier versions. The default AdaBoost model is trained with 0.6 (docs/benchmarks.md "Training on
+  // groups": fewer misses on the ETH/UCY bench, no loss in the simulator's furnished worlds).
   double group_probability = 0.0;
 };
 // A random room around the sensor (at the origin, facing +x): walls with door openings and door leaves,
