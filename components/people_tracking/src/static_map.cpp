@@ -6,14 +6,19 @@
 
 namespace cairn::people_tracking {
 
+Eigen::Vector2i StaticMap::cellOf(const Eigen::Vector2d& p_map) const {
+  const Eigen::Vector2d q = (p_map - origin) / resolution;
+  return {static_cast<int>(std::floor(q.x())), static_cast<int>(std::floor(q.y()))};
+}
+
 bool StaticMap::occupiedWithin(const Eigen::Vector2d& p_tracking, double radius) const {
   if (width <= 0 || height <= 0 || !(resolution > 0.0)) return false;
-  const Eigen::Vector2d p = map_from_tracking.transform(p_tracking) - origin;
+  const Eigen::Vector2d p_map = map_from_tracking.transform(p_tracking), p = p_map - origin;
   const int r = static_cast<int>(std::ceil(radius / resolution));
-  const int cx = static_cast<int>(std::floor(p.x() / resolution)), cy = static_cast<int>(std::floor(p.y() / resolution));
-  for (int y = std::max(0, cy - r); y <= std::min(height - 1, cy + r); ++y)
-    for (int x = std::max(0, cx - r); x <= std::min(width - 1, cx + r); ++x) {
-      if (!occupied[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)]) continue;
+  const Eigen::Vector2i c0 = cellOf(p_map);
+  for (int y = std::max(0, c0.y() - r); y <= std::min(height - 1, c0.y() + r); ++y)
+    for (int x = std::max(0, c0.x() - r); x <= std::min(width - 1, c0.x() + r); ++x) {
+      if (!occupied[index(x, y)]) continue;
       const Eigen::Vector2d c((x + 0.5) * resolution, (y + 0.5) * resolution);
       if ((c - p).norm() <= radius) return true;
     }
@@ -42,10 +47,8 @@ StaticMap rasterize(const Scene& scene, double resolution) {
   m.height = static_cast<int>(std::ceil((hi.y() - m.origin.y()) / resolution)) + 1;
   m.occupied.assign(static_cast<std::size_t>(m.width) * static_cast<std::size_t>(m.height), 0);
   auto mark = [&](const Eigen::Vector2d& p) {
-    const int x = static_cast<int>(std::floor((p.x() - m.origin.x()) / resolution));
-    const int y = static_cast<int>(std::floor((p.y() - m.origin.y()) / resolution));
-    if (x >= 0 && y >= 0 && x < m.width && y < m.height)
-      m.occupied[static_cast<std::size_t>(y) * static_cast<std::size_t>(m.width) + static_cast<std::size_t>(x)] = 1;
+    const Eigen::Vector2i c = m.cellOf(p);
+    if (c.x() >= 0 && c.y() >= 0 && c.x() < m.width && c.y() < m.height) m.occupied[m.index(c.x(), c.y())] = 1;
   };
   const double step = 0.5 * resolution;
   for (const auto& s : scene.segments) {

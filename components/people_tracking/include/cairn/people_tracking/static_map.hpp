@@ -25,6 +25,12 @@ struct StaticMap {
 
   // Whether an occupied cell's centre lies within `radius` of p (tracking frame). Outside the grid: free.
   [[nodiscard]] bool occupiedWithin(const Eigen::Vector2d& p_tracking, double radius) const;
+  // The cell (column, row) containing a map-frame point; may lie outside the grid.
+  [[nodiscard]] Eigen::Vector2i cellOf(const Eigen::Vector2d& p_map) const;
+  // Index into `occupied` of a cell inside the grid.
+  [[nodiscard]] std::size_t index(int x, int y) const {
+    return static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x);
+  }
 };
 
 // The scene's static geometry (segments and circles that are not people) rasterised at `resolution`; the grid
