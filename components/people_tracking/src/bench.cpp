@@ -138,9 +138,16 @@ BenchResult runBench(const BenchParams& params) {
   if (!(params.scan_rate > 0.0)) throw InputError("scan rate must be positive");
   if (!params.laser_fov_set && (params.laser_beams < 8 || params.laser_beams > 100000))
     throw InputError("laser_beams (--beams) must be in [8, 100000], got " + std::to_string(params.laser_beams));
+  if (!(params.trajectory_smoothing >= 0.0 && params.trajectory_smoothing <= 10.0))
+    throw InputError("trajectory smoothing (--smooth) must be in [0, 10] s, got " +
+                     std::to_string(params.trajectory_smoothing));
   if (params.oracle_detections && !(params.oracle_sigma > 0.0 && params.oracle_sigma < 10.0))
     throw InputError("oracle sigma must be in (0, 10) m");
-  const TrajectorySet traj = loadTrajectories(params.trajectories);
+  const TrajectorySet traj = [&] {
+    TrajectorySet t = loadTrajectories(params.trajectories);
+    if (params.trajectory_smoothing > 0.0) smoothTrajectories(t, params.trajectory_smoothing);
+    return t;
+  }();
   const std::string model_path =
       params.model.empty() ? defaultModelPath(ClassifierKind::kAdaBoost, "arras14") : params.model;
   auto classifier = std::make_shared<const LegClassifier>(LegClassifier::load(model_path));
@@ -350,6 +357,7 @@ std::string benchJson(const BenchParams& p, const BenchResult& r) {
     << ", \"mean_people_counted\": " << r.mean_people_counted << ", \"match_threshold_m\": " << p.match_threshold
     << ", \"sensor_range_m\": " << p.sensor_range;
   if (!p.laser_fov_set) o << ", \"laser_beams\": " << p.laser_beams;
+  o << ", \"trajectory_smoothing_s\": " << p.trajectory_smoothing;
   o << ", \"cairn\": " << run(r.cairn)
     << ", \"baseline\": " << run(r.baseline) << ", \"baseline_name\": \"greedy nearest neighbour, no motion model\"}";
   return o.str();

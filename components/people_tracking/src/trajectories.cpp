@@ -24,6 +24,34 @@ std::optional<Eigen::Vector2d> TrajectorySet::positionAt(int id, double t) const
   return Eigen::Vector2d((1 - a) * lo->p + a * hi->p);
 }
 
+void smoothTrajectories(TrajectorySet& set, double sigma) {
+  if (!(sigma > 0.0) || !std::isfinite(sigma))
+    throw InputError("trajectory smoothing sigma must be a positive number of seconds, got " + std::to_string(sigma));
+  for (auto& [id, v] : set.people) {
+    std::vector<TrajectoryPoint> out = v;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      std::size_t a = i, b = i;  // the window: contiguous annotations within 3 sigma of point i
+      while (a > 0 && v[a].t - v[a - 1].t <= set.max_gap && v[i].t - v[a - 1].t <= 3.0 * sigma) --a;
+      while (b + 1 < v.size() && v[b + 1].t - v[b].t <= set.max_gap && v[b + 1].t - v[i].t <= 3.0 * sigma) ++b;
+      // Weighted least squares p(t) = c0 + c1 (t - t_i); the estimate at t_i is c0.
+      double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+      Eigen::Vector2d m0 = Eigen::Vector2d::Zero(), m1 = Eigen::Vector2d::Zero();
+      for (std::size_t j = a; j <= b; ++j) {
+        const double d = v[j].t - v[i].t, w = std::exp(-0.5 * d * d / (sigma * sigma));
+        s0 += w;
+        s1 += w * d;
+        s2 += w * d * d;
+        m0 += w * v[j].p;
+        m1 += w * d * v[j].p;
+      }
+      const double det = s0 * s2 - s1 * s1;
+      // A lone annotation (or a window too short for a line) keeps its weighted mean, i.e. itself.
+      out[i].p = det > 1e-12 * s0 * s0 ? Eigen::Vector2d((s2 * m0 - s1 * m1) / det) : Eigen::Vector2d(m0 / s0);
+    }
+    v = std::move(out);
+  }
+}
+
 std::size_t TrajectorySet::samples() const {
   std::size_t n = 0;
   for (const auto& [id, v] : people) n += v.size();

@@ -28,4 +28,5 @@ expect_error("expects a number, got 'x'" bench --world office --trajectories bad
 expect_error("option --trajectory-offset expects a finite number, got 'nan'" bench --world auto --trajectories bad_tracks.csv --trajectory-offset nan,1)
 expect_error("option --beams expects an integer in [8, 100000], got '1080.5'" bench --world auto --trajectories bad_tracks.csv --beams 1080.5)
 expect_error("option --beams expects an integer in [8, 100000], got '4'" bench --world auto --trajectories bad_tracks.csv --beams 4)
+expect_error("trajectory smoothing (--smooth) must be in [0, 10] s, got -1" bench --world auto --trajectories bad_tracks.csv --smooth -1)
 expect_error("option --process-noise expects a finite number, got 'inf'" bench --world auto --trajectories bad_tracks.csv --process-noise inf)

@@ -69,6 +69,23 @@ TEST(Bench, OracleDetectionsScoreTheTrackerAlone) {
   EXPECT_LT(oracle.cairn.mot.motp(), 0.08);  // 5 cm noise per axis: mean error about 6 cm
 }
 
+// --smooth: the walkers replay smoothed annotations. The ETH annotations' jitter makes linearly interpolated
+// walkers change velocity abruptly; the tracking core (oracle detections) loses fewer of them when smoothed.
+// The counted people stay nearly the same (smoothing moves annotations by a few centimetres).
+TEST(Bench, SmoothedReplayCostsTheTrackingCoreFewerSwitchesAndMisses) {
+  BenchParams p = excerpt();
+  p.oracle_detections = true;
+  const BenchResult raw = runBench(p);
+  p.trajectory_smoothing = 0.4;
+  const BenchResult smooth = runBench(p);
+  EXPECT_NEAR(static_cast<double>(smooth.cairn.mot.gt), static_cast<double>(raw.cairn.mot.gt), 0.02 * raw.cairn.mot.gt);
+  EXPECT_LE(smooth.cairn.mot.id_switches, raw.cairn.mot.id_switches);
+  EXPECT_LT(smooth.cairn.mot.fn + smooth.cairn.mot.fp, raw.cairn.mot.fn + raw.cairn.mot.fp);
+  EXPECT_NE(benchJson(p, smooth).find("\"trajectory_smoothing_s\": 0.4"), std::string::npos);
+  p.trajectory_smoothing = -0.1;
+  EXPECT_THROW(runBench(p), InputError);
+}
+
 // --beams: the 360 deg scan's resolution. Half the beams (0.67 deg) leave fewer people hit by the 3 beams that
 // make them count, and the tracker finds fewer of those it counts.
 TEST(Bench, CoarserLaserCountsFewerPeopleAndTracksWorse) {

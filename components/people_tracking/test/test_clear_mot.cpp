@@ -130,3 +130,37 @@ TEST(Trajectories, LoadsCsvAndRejectsBadInput) {
   std::filesystem::remove(csv);
   EXPECT_THROW(loadTrajectories("/nonexistent/file.txt"), InputError);
 }
+
+// Local linear smoothing: constant-velocity motion (also its ends) stays exactly where it was, alternating
+// annotation jitter shrinks, and a gap splits a person's track into separately smoothed pieces.
+TEST(Trajectories, SmoothingKeepsStraightLinesAndRemovesJitter) {
+  TrajectorySet s;
+  s.max_gap = 1.0;
+  std::vector<TrajectoryPoint>& line = s.people[1];
+  std::vector<TrajectoryPoint>& noisy = s.people[2];
+  std::vector<TrajectoryPoint>& gapped = s.people[3];
+  for (int k = 0; k < 20; ++k) {
+    const double t = 0.4 * k;
+    line.push_back({t, Eigen::Vector2d(1.3 * t, 2.0 - 0.4 * t)});
+    noisy.push_back({t, Eigen::Vector2d(1.3 * t, (k % 2 ? 0.05 : -0.05))});  // +-5 cm zig-zag across the walk
+  }
+  for (int k = 0; k < 5; ++k) gapped.push_back({0.4 * k, Eigen::Vector2d(0.0, 0.0)});
+  for (int k = 0; k < 5; ++k) gapped.push_back({10.0 + 0.4 * k, Eigen::Vector2d(5.0, 0.0)});  // 8.4 s gap
+  const TrajectorySet raw = s;
+  smoothTrajectories(s, 0.4);
+  for (std::size_t k = 0; k < line.size(); ++k) {
+    EXPECT_NEAR(line[k].p.x(), raw.people.at(1)[k].p.x(), 1e-9);
+    EXPECT_NEAR(line[k].p.y(), raw.people.at(1)[k].p.y(), 1e-9);
+    EXPECT_EQ(line[k].t, raw.people.at(1)[k].t);
+  }
+  for (std::size_t k = 2; k + 2 < noisy.size(); ++k) {
+    EXPECT_NEAR(noisy[k].p.x(), raw.people.at(2)[k].p.x(), 1e-9);  // the walk itself is a line
+    EXPECT_LT(std::abs(noisy[k].p.y()), 0.025);                      // jitter at least halved
+  }
+  for (int k = 0; k < 5; ++k) EXPECT_NEAR(gapped[static_cast<std::size_t>(k)].p.x(), 0.0, 1e-12);  // not pulled across
+  for (int k = 5; k < 10; ++k) EXPECT_NEAR(gapped[static_cast<std::size_t>(k)].p.x(), 5.0, 1e-12);
+  EXPECT_EQ(s.min, raw.min);  // bounds stay those of the annotations
+  EXPECT_THROW(smoothTrajectories(s, 0.0), InputError);
+  EXPECT_THROW(smoothTrajectories(s, -1.0), InputError);
+  EXPECT_THROW(smoothTrajectories(s, std::nan("")), InputError);
+}

@@ -35,6 +35,7 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--duration") p.duration = number(value());
     else if (a == "--start") p.start = number(value());
     else if (a == "--rate") p.scan_rate = number(value());
+    else if (a == "--smooth") p.trajectory_smoothing = number(value());
     else if (a == "--model") p.model = value();
     else if (a == "--association") p.tracker.association = associationFromString(value());
     else if (a == "--dump") p.dump_dir = value();

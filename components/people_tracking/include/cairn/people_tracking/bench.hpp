@@ -27,6 +27,9 @@ struct BenchParams {
   // The tracker gets the world's static geometry (the auto world's walls, or world_geometry at the start time)
   // as a static map (static_map.hpp): legs next to it are dropped.
   bool static_map = false;
+  // Walkers replay the annotations smoothed with smoothTrajectories(sigma = this, s); 0 = linear interpolation
+  // of the raw annotations (default). Ground truth is where the walkers are, so it is smoothed too.
+  double trajectory_smoothing = 0.0;
   std::string robot_path;      // "" static; "circle:R" circles the centre at 0.4 m/s; or CSV t,x,y,theta
   std::uint64_t seed = 1;
   double scan_rate = 10.0;     // Hz
