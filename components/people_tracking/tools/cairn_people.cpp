@@ -62,13 +62,10 @@ Args parse(int argc, char** argv, int first, const std::vector<std::string>& boo
   return a;
 }
 
-long toLong(const Args& a, const std::string& k, long def) {
+long long toInteger(const Args& a, const std::string& k, long long def, long long lo, long long hi) {
   const std::string v = a.get(k, "");
   if (v.empty()) return def;
-  char* end = nullptr;
-  const long x = std::strtol(v.c_str(), &end, 10);
-  if (*end != '\0') fail("--" + k + " expects an integer, got '" + v + "'");
-  return x;
+  return parseInteger("--" + k, v, lo, hi);
 }
 
 double toDouble(const Args& a, const std::string& k, double def) {
@@ -119,10 +116,10 @@ int genTrain(const Args& a) {
   SimTrainingParams p;
   const std::string worlds = a.get("worlds", "");
   if (!worlds.empty()) p.worlds = splitCommas(worlds);
-  p.episodes = static_cast<int>(toLong(a, "episodes", p.episodes));
-  p.seed = static_cast<std::uint64_t>(toLong(a, "seed", 1));
-  p.scans_per_episode = static_cast<int>(toLong(a, "scans-per-episode", p.scans_per_episode));
-  p.max_walkers = static_cast<int>(toLong(a, "max-walkers", p.max_walkers));
+  p.episodes = static_cast<int>(toInteger(a, "episodes", p.episodes, 1, 10000000));
+  p.seed = static_cast<std::uint64_t>(toInteger(a, "seed", 1, 0, kMaxSeed));
+  p.scans_per_episode = static_cast<int>(toInteger(a, "scans-per-episode", p.scans_per_episode, 1, 100000));
+  p.max_walkers = static_cast<int>(toInteger(a, "max-walkers", p.max_walkers, 1, 1000));
   p.walker_area = toDouble(a, "walker-area", p.walker_area);
   if (!(p.walker_area >= 1.0 && p.walker_area <= 50.0)) fail("gen-train: --walker-area must be in [1, 50] m");
   if (p.episodes < 1 || p.scans_per_episode < 1) fail("gen-train: --episodes and --scans-per-episode must be >= 1");
@@ -131,7 +128,7 @@ int genTrain(const Args& a) {
   if (out.empty()) fail("gen-train needs -o FILE");
   if (a.has("scene-generator")) {  // the package's own scene generator instead of the simulator (for comparisons)
     TrainingDataParams d;
-    d.scenes = static_cast<int>(toLong(a, "scene-generator", 500));
+    d.scenes = static_cast<int>(toInteger(a, "scene-generator", 500, 1, 10000000));
     d.seed = p.seed;
     const auto samples = generateLabelledClusters(d);
     saveLabelledClusters(out, samples);
@@ -169,15 +166,15 @@ int train(const Args& a) {
   ClassifierTrainParams p;
   p.kind = classifierKindFromString(a.get("kind", "adaboost"));
   p.feature_set = a.get("features", "arras14@1");
-  p.boost_weak_count = static_cast<int>(toLong(a, "weak-count", p.boost_weak_count));
+  p.boost_weak_count = static_cast<int>(toInteger(a, "weak-count", p.boost_weak_count, 1, 100000));
   p.svm_c = toDouble(a, "svm-c", p.svm_c);
   p.svm_gamma = toDouble(a, "svm-gamma", p.svm_gamma);
   p.positive_weight = toDouble(a, "pos-weight", p.positive_weight);
   TrainingDataParams d;
   // --data only: the CSV files; --data and --scenes: both (a mix); neither: generated scenes.
-  d.scenes = static_cast<int>(toLong(a, "scenes", a.has("data") ? 0 : 1500));
-  d.seed = static_cast<std::uint64_t>(toLong(a, "seed", 1));
-  d.segmentation.min_points = static_cast<int>(toLong(a, "min-points", d.segmentation.min_points));
+  d.scenes = static_cast<int>(toInteger(a, "scenes", a.has("data") ? 0 : 1500, 0, 10000000));
+  d.seed = static_cast<std::uint64_t>(toInteger(a, "seed", 1, 0, kMaxSeed));
+  d.segmentation.min_points = static_cast<int>(toInteger(a, "min-points", d.segmentation.min_points, 1, 1000));
   d.scene.group_probability = groupProbability(a);
   const std::string out = a.get("out", "");
   if (out.empty()) fail("train needs --out FILE");
@@ -201,8 +198,8 @@ int eval(const Args& a) {
   if (path.empty()) fail("eval needs --model FILE");
   const LegClassifier c = LegClassifier::load(path);
   TrainingDataParams d;
-  d.scenes = static_cast<int>(toLong(a, "scenes", a.has("data") ? 0 : 500));
-  d.seed = static_cast<std::uint64_t>(toLong(a, "seed", 1000003));
+  d.scenes = static_cast<int>(toInteger(a, "scenes", a.has("data") ? 0 : 500, 0, 10000000));
+  d.seed = static_cast<std::uint64_t>(toInteger(a, "seed", 1000003, 0, kMaxSeed));
   d.scene.group_probability = groupProbability(a);
   auto samples = generateLabelledClusters(d);
   const std::vector<LabelledCluster> data = loadData(a.get("data", ""));

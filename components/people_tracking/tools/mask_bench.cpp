@@ -360,7 +360,7 @@ int runMaskBenchVerb(int argc, char** argv) {
     if (a == "--json") p.json = true;
     else if (a == "--world") p.world = value();
     else if (a == "--route") p.route = value();
-    else if (a == "--seed") p.seed = static_cast<std::uint64_t>(number(value()));
+    else if (a == "--seed") p.seed = static_cast<std::uint64_t>(parseInteger(a, value(), 0, kMaxSeed));
     else if (a == "--speed") p.speed = number(value());
     else if (a == "--lead") p.lead = number(value());
     else if (a == "--heading-drift") p.heading_drift = number(value());

@@ -27,11 +27,12 @@ int runBenchVerb(int argc, char** argv) {
       return argv[++i];
     };
     auto number = [&](const std::string& v) { return parseNumber(a, v); };
+    auto integer = [&](const std::string& v, long long lo, long long hi) { return parseInteger(a, v, lo, hi); };
     if (a == "--json") json = true;
     else if (a == "--world") p.world = value();
     else if (a == "--trajectories") p.trajectories = value();
     else if (a == "--robot-path") p.robot_path = value();
-    else if (a == "--seed") p.seed = static_cast<std::uint64_t>(number(value()));
+    else if (a == "--seed") p.seed = static_cast<std::uint64_t>(integer(value(), 0, kMaxSeed));
     else if (a == "--duration") p.duration = number(value());
     else if (a == "--start") p.start = number(value());
     else if (a == "--rate") p.scan_rate = number(value());
@@ -45,7 +46,7 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--maneuver-end-rate") p.tracker.maneuver_end_rate = number(value());
     else if (a == "--delete-timeout") p.tracker.delete_timeout = number(value());
     else if (a == "--max-position-sigma") p.tracker.max_position_sigma = number(value());
-    else if (a == "--confirm-hits") p.tracker.confirm_hits = static_cast<int>(number(value()));
+    else if (a == "--confirm-hits") p.tracker.confirm_hits = static_cast<int>(integer(value(), 1, 1000));
     else if (a == "--oracle-detections") p.oracle_detections = true;
     else if (a == "--static-map") p.static_map = true;
     else if (a == "--static-map-margin") p.tracker.static_map_margin = number(value());
@@ -57,20 +58,14 @@ int runBenchVerb(int argc, char** argv) {
     }
     else if (a == "--leg-spread") p.tracker.leg_spread_sigma = number(value());
     else if (a == "--leg-spread-lateral") p.tracker.leg_spread_lateral_sigma = number(value());
-    else if (a == "--beams") {
-      const std::string v = value();
-      const double b = number(v);
-      if (b != std::floor(b) || b < 8 || b > 100000)
-        throw InputError("option --beams expects an integer in [8, 100000], got '" + v + "'");
-      p.laser_beams = static_cast<int>(b);
-    }
+    else if (a == "--beams") p.laser_beams = static_cast<int>(integer(value(), 8, 100000));
     else if (a == "--leg-gate") p.tracker.leg_gate_chi2 = number(value());
     else if (a == "--reid-window") p.tracker.reid_window = number(value());
     else if (a == "--publish-coast") p.tracker.publish_coast_time = number(value());
     else if (a == "--occluded-coast") p.tracker.occluded_coast_time = number(value());
     else if (a == "--occluded-delete-timeout") p.tracker.occluded_delete_timeout = number(value());
-    else if (a == "--free-space-delete") p.tracker.free_space_delete_scans = static_cast<int>(number(value()));
-    else if (a == "--split-scans") p.tracker.split_scans = static_cast<int>(number(value()));
+    else if (a == "--free-space-delete") p.tracker.free_space_delete_scans = static_cast<int>(integer(value(), 1, 1000));
+    else if (a == "--split-scans") p.tracker.split_scans = static_cast<int>(integer(value(), 0, 1000));
     else if (a == "--visibility-radius") p.tracker.visibility_radius = number(value());
     else if (a == "--min-init-distance") p.tracker.min_init_distance = number(value());
     else if (a == "--single-leg-stride") p.tracker.single_leg_stride_sigma = number(value());
@@ -78,7 +73,7 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--track-leg-confidence") p.detector.track_leg_confidence = number(value());
     else if (a == "--min-leg-confidence") p.detector.min_leg_confidence = number(value());
     else if (a == "--pair-distance") p.detector.max_leg_pair_distance = number(value());
-    else if (a == "--min-points") p.detector.segmentation.min_points = static_cast<int>(number(value()));
+    else if (a == "--min-points") p.detector.segmentation.min_points = static_cast<int>(integer(value(), 1, 1000));
     else if (a == "--sigma-pair") p.detector.sigma_pair = number(value());
     else if (a == "--sigma-single") p.detector.sigma_single = number(value());
     else if (a == "--trajectory-offset") {  // x,y[,theta]: world = offset (+) data
