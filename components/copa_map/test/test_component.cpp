@@ -427,6 +427,18 @@ TEST(CopaMapComponent, LaunchSpecValidatesItsParameters) {
   EXPECT_NE(e.find("'grid.nx' and 'grid.ny' must both be 0 or both positive"), std::string::npos) << e;
   e = launchError("{map_file: /no/such/map.yaml}");
   EXPECT_NE(e.find("map_file: "), std::string::npos) << e;
+  // A map YAML with a malformed value names the file, line and key (atof used to read it as 0 / all occupied).
+  const std::string bad_map = testing::TempDir() + "/cairn_copa_component_bad_map.yaml";
+  { std::ofstream(bad_map) << "image: map.pgm\nresolution: 0.05\norigin: [0, 0, 0]\noccupied_thresh: high\n"; }
+  e = launchError("{map_file: " + bad_map + "}");
+  EXPECT_NE(e.find("map_file: " + bad_map + ":4: 'occupied_thresh' expects a number, got 'high'"), std::string::npos) << e;
+  { std::ofstream(bad_map) << "image: map.pgm\nresolution: 0.05\norigin: [0, zero, 0]\n"; }
+  e = launchError("{map_file: " + bad_map + "}");
+  EXPECT_NE(e.find(bad_map + ":3: 'origin' expects a number, got 'zero'"), std::string::npos) << e;
+  { std::ofstream(bad_map) << "image: map.pgm\nnegate: yes\n"; }
+  e = launchError("{map_file: " + bad_map + "}");
+  EXPECT_NE(e.find(bad_map + ":2: 'negate' expects 0 or 1, got 'yes'"), std::string::npos) << e;
+  std::filesystem::remove(bad_map);
   e = launchError("{pose_source: gps}");
   EXPECT_NE(e.find("pose_source: 'gps' is neither 'tf' nor 'odom'"), std::string::npos) << e;
   e = launchError("{train.no_such_param: 1}");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -16,6 +17,15 @@ std::string trim(const std::string& s) {
   const auto a = s.find_first_not_of(" \t\r\n");
   if (a == std::string::npos) return "";
   return s.substr(a, s.find_last_not_of(" \t\r\n") - a + 1);
+}
+
+// A finite number, or InputError naming the file, line and key.
+double yamlNumber(const std::string& path, long line, const std::string& key, const std::string& text) {
+  char* end = nullptr;
+  const double x = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(x))
+    throw InputError(path, line, "'" + key + "' expects a number, got '" + text + "'");
+  return x;
 }
 }  // namespace
 
@@ -32,7 +42,7 @@ MapImage loadMapYaml(const std::string& yaml_path) {
     const std::string t = trim(line);
     if (t.empty() || t[0] == '#') continue;
     if (t[0] == '-' && list_key == "origin") {
-      origin.push_back(std::atof(trim(t.substr(1)).c_str()));
+      origin.push_back(yamlNumber(yaml_path, ln, "origin", trim(t.substr(1))));
       continue;
     }
     const auto c = t.find(':');
@@ -40,17 +50,21 @@ MapImage loadMapYaml(const std::string& yaml_path) {
     const std::string key = trim(t.substr(0, c)), val = trim(t.substr(c + 1));
     list_key = val.empty() ? key : "";
     if (key == "image") image = val;
-    else if (key == "resolution") res = std::atof(val.c_str());
-    else if (key == "negate") negate = std::atoi(val.c_str());
-    else if (key == "occupied_thresh") occ_th = std::atof(val.c_str());
-    else if (key == "origin" && !val.empty()) {
+    else if (key == "resolution") res = yamlNumber(yaml_path, ln, key, val);
+    else if (key == "negate") {
+      if (val != "0" && val != "1") throw InputError(yaml_path, ln, "'negate' expects 0 or 1, got '" + val + "'");
+      negate = val == "1";
+    } else if (key == "occupied_thresh") {
+      occ_th = yamlNumber(yaml_path, ln, key, val);
+      if (occ_th < 0.0 || occ_th > 1.0) throw InputError(yaml_path, ln, "'occupied_thresh' must be in [0, 1]");
+    } else if (key == "origin" && !val.empty()) {
       std::string v = val;
       std::replace(v.begin(), v.end(), '[', ' ');
       std::replace(v.begin(), v.end(), ']', ' ');
       std::replace(v.begin(), v.end(), ',', ' ');
       std::stringstream ss(v);
-      double d;
-      while (ss >> d) origin.push_back(d);
+      std::string item;
+      while (ss >> item) origin.push_back(yamlNumber(yaml_path, ln, key, item));
     }
   }
   if (image.empty() || !(res > 0) || origin.size() < 2)

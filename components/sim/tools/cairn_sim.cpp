@@ -4,6 +4,8 @@
 //   cairn-sim run --world <name|file> --duration <s> --seed N --out <dir> [...]
 // Bad input: one line `cairn: <file>:<line>: <what>` on stderr, exit code 2.
 #include <algorithm>
+#include <cerrno>
+#include <climits>
 #include <chrono>
 #include <ctime>
 #include <cmath>
@@ -34,6 +36,26 @@ namespace {
   std::cerr << "cairn: cairn-sim: " << msg << "\n";
   std::exit(2);
 }
+
+// Option values: a finite number, or an integer in [lo, hi]; anything else is a usage error naming verb and option.
+double numberArg(const std::string& verb, const std::string& option, const std::string& v) {
+  char* end = nullptr;
+  const double d = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end || !std::isfinite(d)) usageError(verb + ": " + option + " expects a number, got '" + v + "'");
+  return d;
+}
+
+long long integerArg(const std::string& verb, const std::string& option, const std::string& v, long long lo,
+                     long long hi) {
+  char* end = nullptr;
+  errno = 0;
+  const long long x = std::strtoll(v.c_str(), &end, 10);
+  if (v.empty() || *end || errno == ERANGE || x < lo || x > hi)
+    usageError(verb + ": " + option + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+               "], got '" + v + "'");
+  return x;
+}
+constexpr long long kMaxSeed = LLONG_MAX;
 
 void usage() {
   std::cout << "usage: cairn-sim <verb> [options]\n"
@@ -216,11 +238,12 @@ int cmdBench(int argc, char** argv) {
     };
     if (a == "--world") worlds.push_back(value());
     else if (a == "--json") json = true;
-    else if (a == "--seconds") seconds = std::atof(value().c_str());
-    else if (a == "--repeat") repeat = std::max(1, std::atoi(value().c_str()));
-    else if (a == "--seed") seed = std::strtoull(value().c_str(), nullptr, 10);
+    else if (a == "--seconds") seconds = numberArg("bench", a, value());
+    else if (a == "--repeat") repeat = static_cast<int>(integerArg("bench", a, value(), 1, 1000000));
+    else if (a == "--seed") seed = static_cast<std::uint64_t>(integerArg("bench", a, value(), 0, kMaxSeed));
     else usageError("bench: unknown option '" + a + "'");
   }
+  if (!(seconds > 0.0)) usageError("bench: --seconds must be > 0, got " + std::to_string(seconds));
   if (worlds.empty() || (worlds.size() == 1 && worlds[0] == "all")) worlds = shippedWorlds();
   std::vector<BenchResult> results;
   for (const auto& w : worlds) results.push_back(benchWorld(w, seconds, repeat, seed));
@@ -255,16 +278,10 @@ int cmdRun(int argc, char** argv) {
       if (i + 1 >= argc) usageError("run: " + a + " needs a value");
       return argv[++i];
     };
-    auto number = [&]() {
-      const std::string v = value();
-      char* end = nullptr;
-      const double d = std::strtod(v.c_str(), &end);
-      if (end == v.c_str() || *end) usageError("run: " + a + " expects a number, got '" + v + "'");
-      return d;
-    };
+    auto number = [&]() { return numberArg("run", a, value()); };
     if (a == "--world") world_name = value();
     else if (a == "--duration") duration = number();
-    else if (a == "--seed") cfg.seed = static_cast<std::uint64_t>(number());
+    else if (a == "--seed") cfg.seed = static_cast<std::uint64_t>(integerArg("run", a, value(), 0, kMaxSeed));
     else if (a == "--out") out_dir = value();
     else if (a == "--route") route_name = value();
     else if (a == "--no-people") cfg.people = false;
@@ -342,9 +359,9 @@ int cmdPeople(int argc, char** argv) {
       return argv[++i];
     };
     if (a == "--world") world_name = value();
-    else if (a == "--duration") duration = std::atof(value().c_str());
-    else if (a == "--rate") rate = std::atof(value().c_str());
-    else if (a == "--seed") seed = std::strtoull(value().c_str(), nullptr, 10);
+    else if (a == "--duration") duration = numberArg("people", a, value());
+    else if (a == "--rate") rate = numberArg("people", a, value());
+    else if (a == "--seed") seed = static_cast<std::uint64_t>(integerArg("people", a, value(), 0, kMaxSeed));
     else if (a == "--out") out_file = value();
     else usageError("people: unknown option '" + a + "'");
   }
