@@ -507,8 +507,11 @@ TEST(PeopleTrackerComponent, StaticMapDropsLegsOnMappedCells) {
     std::map<std::string, std::string> extra;
     if (with_map) extra["static_map.topic"] = "map";
     ASSERT_NO_FATAL_FAILURE(rig.start(with_map ? "people_container5" : "people_container4", world, 0.2, extra));
+    // The map's writer lives until the run ends: a latched sample goes with its writer, and under load the
+    // component may match the writer before it has received the sample.
+    decltype(rig.sim->create_publisher<nav_msgs::msg::OccupancyGrid>("map", cairn::QoS::latched())) map_pub;
     if (with_map) {
-      auto map_pub = rig.sim->create_publisher<nav_msgs::msg::OccupancyGrid>("map", cairn::QoS::latched());
+      map_pub = rig.sim->create_publisher<nav_msgs::msg::OccupancyGrid>("map", cairn::QoS::latched());
       // 40 x 40 cells of 5 cm; origin at (6, 2) turned by +90 deg: cell (i, j) centre = (6 - (j + 0.5) r, 2 + (i + 0.5) r).
       nav_msgs::msg::OccupancyGrid grid;
       grid.header.frame_id = "odom";
