@@ -1,5 +1,6 @@
 #include "cairn/people_tracking/bench.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -130,6 +131,46 @@ std::uint64_t mix(std::uint64_t a, std::uint64_t b) {
 
 }  // namespace
 
+namespace {
+// The camera's detections (tracking frame) of the counted people `gt` seen from `pose`; see CameraModel.
+std::vector<PersonDetection> cameraDetections(const CameraModel& cam, const Pose2& pose, const std::vector<MotObject>& gt,
+                                              std::mt19937_64& rng) {
+  std::vector<PersonDetection> out;
+  if (!(cam.fov > 0.0)) return out;
+  std::normal_distribution<double> N(0.0, 1.0);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  const Eigen::Vector2d origin(pose.x, pose.y);
+  auto inField = [&](double distance, double bearing) {
+    return distance <= cam.range && std::abs(std::remainder(bearing - pose.theta, 2 * M_PI)) <= 0.5 * cam.fov;
+  };
+  auto detection = [&](double distance, double bearing) {
+    PersonDetection d;
+    d.position = origin + distance * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+    const double sr = std::max(0.05, cam.range_sigma * distance), sb = std::max(0.01, distance * cam.bearing_sigma);
+    const Eigen::Matrix2d R = Eigen::Rotation2Dd(bearing).toRotationMatrix();
+    d.covariance = R * Eigen::Vector2d(sr * sr, sb * sb).asDiagonal() * R.transpose();
+    d.confidence = 0.9;
+    d.legs = 0;
+    d.source = 1;
+    return d;
+  };
+  for (const MotObject& g : gt) {
+    const Eigen::Vector2d v = g.p - origin;
+    const double distance = v.norm(), bearing = std::atan2(v.y(), v.x());
+    if (!inField(distance, bearing) || U(rng) >= cam.detection_probability) continue;
+    const double noisy_distance = std::max(0.1, distance * (1.0 + cam.range_sigma * N(rng)));
+    out.push_back(detection(noisy_distance, bearing + cam.bearing_sigma * N(rng)));
+  }
+  // Poisson false detections, uniform over the field's area.
+  std::poisson_distribution<int> false_count(cam.false_per_scan);
+  for (int k = false_count(rng); k > 0; --k) {
+    const double distance = cam.range * std::sqrt(U(rng)), bearing = pose.theta + cam.fov * (U(rng) - 0.5);
+    out.push_back(detection(distance, bearing));
+  }
+  return out;
+}
+}  // namespace
+
 BenchResult runBench(const BenchParams& params) {
   const bool auto_world = params.world == "auto";
   if (!auto_world && !params.world_geometry)
@@ -141,6 +182,13 @@ BenchResult runBench(const BenchParams& params) {
   if (!(params.trajectory_smoothing >= 0.0 && params.trajectory_smoothing <= 10.0))
     throw InputError("trajectory smoothing (--smooth) must be in [0, 10] s, got " +
                      std::to_string(params.trajectory_smoothing));
+  const CameraModel& cam = params.camera;
+  if (!(cam.fov >= 0.0 && cam.fov <= 2 * M_PI) || !(cam.range > 0.0 && cam.range <= 100.0) ||
+      !(cam.bearing_sigma >= 0.0 && cam.bearing_sigma < 1.0) || !(cam.range_sigma >= 0.0 && cam.range_sigma < 1.0) ||
+      !(cam.detection_probability >= 0.0 && cam.detection_probability <= 1.0) ||
+      !(cam.false_per_scan >= 0.0 && cam.false_per_scan <= 100.0))
+    throw InputError("camera model out of range (fov [0, 360] deg, range (0, 100] m, bearing sigma [0, 57) deg, "
+                     "range sigma [0, 1), detection probability [0, 1], false detections [0, 100] per scan)");
   if (params.oracle_detections && !(params.oracle_sigma > 0.0 && params.oracle_sigma < 10.0))
     throw InputError("oracle sigma must be in (0, 10) m");
   const TrajectorySet traj = [&] {
@@ -185,6 +233,7 @@ BenchResult runBench(const BenchParams& params) {
   ClearMot mot(params.match_threshold), mot_base(params.match_threshold);
   std::mt19937_64 rng(mix(params.seed, 1));
   std::mt19937_64 oracle_rng(mix(params.seed, 2));  // separate stream: the scans stay those of a normal run
+  std::mt19937_64 camera_rng(mix(params.seed, 3));  // likewise
 
   // Per-person body parameters, seeded by (seed, id).
   std::map<int, WalkerState> walkers;
@@ -291,7 +340,14 @@ BenchResult runBench(const BenchParams& params) {
       }
       tracker.updateInFrame(t, truth);
     } else if (params.track_aware_pairing) {
-      tracker.updateLegs(t, legs, pose, params.detector, &sim.scan);
+      tracker.updateLegs(t, legs, pose, params.detector, &sim.scan, cameraDetections(cam, pose, gt, camera_rng));
+    } else if (cam.fov > 0.0) {
+      std::vector<PersonDetection> laser = dets;
+      for (auto& d : laser) {
+        d.position = pose.transform(d.position);
+        d.covariance = pose.rotation() * d.covariance * pose.rotation().transpose();
+      }
+      tracker.updateInFrame(t, fuseDetections({laser, cameraDetections(cam, pose, gt, camera_rng)}, params.tracker.fusion));
     } else {
       tracker.update(t, dets, pose);
     }
@@ -358,6 +414,11 @@ std::string benchJson(const BenchParams& p, const BenchResult& r) {
     << ", \"sensor_range_m\": " << p.sensor_range;
   if (!p.laser_fov_set) o << ", \"laser_beams\": " << p.laser_beams;
   o << ", \"trajectory_smoothing_s\": " << p.trajectory_smoothing;
+  if (p.camera.fov > 0.0)
+    o << ", \"camera\": {\"fov_deg\": " << p.camera.fov * 180.0 / M_PI << ", \"range_m\": " << p.camera.range
+      << ", \"bearing_sigma_deg\": " << p.camera.bearing_sigma * 180.0 / M_PI << ", \"range_sigma\": "
+      << p.camera.range_sigma << ", \"detection_probability\": " << p.camera.detection_probability
+      << ", \"false_per_scan\": " << p.camera.false_per_scan << "}";
   o << ", \"cairn\": " << run(r.cairn)
     << ", \"baseline\": " << run(r.baseline) << ", \"baseline_name\": \"greedy nearest neighbour, no motion model\"}";
   return o.str();

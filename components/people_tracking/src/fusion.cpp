@@ -1,5 +1,6 @@
 #include "cairn/people_tracking/fusion.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
 #include <tuple>
@@ -18,21 +19,38 @@ PersonDetection fusePair(const PersonDetection& a, const PersonDetection& b) {
   return f;
 }
 
+std::vector<std::pair<std::size_t, std::size_t>> nearestPairs(const std::vector<PersonDetection>& a,
+                                                              const std::vector<PersonDetection>& b,
+                                                              const FusionParams& params) {
+  std::vector<std::tuple<double, std::size_t, std::size_t>> candidates;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      const Eigen::Vector2d nu = a[i].position - b[j].position;
+      if (nu.norm() > params.max_pair_distance) continue;
+      if (params.gate_chi2 <= 0.0) {
+        candidates.emplace_back(nu.norm(), i, j);
+        continue;
+      }
+      const double d2 = nu.dot((a[i].covariance + b[j].covariance).ldlt().solve(nu));
+      if (d2 <= params.gate_chi2) candidates.emplace_back(d2, i, j);
+    }
+  std::sort(candidates.begin(), candidates.end());
+  std::vector<bool> ua(a.size(), false), ub(b.size(), false);
+  std::vector<std::pair<std::size_t, std::size_t>> out;
+  for (const auto& [d, i, j] : candidates) {
+    if (ua[i] || ub[j]) continue;
+    ua[i] = ub[j] = true;
+    out.emplace_back(i, j);
+  }
+  return out;
+}
+
 namespace {
 std::vector<PersonDetection> fuseTwo(const std::vector<PersonDetection>& a, const std::vector<PersonDetection>& b,
                                      const FusionParams& params) {
-  // Nearest pairs first: repeatedly take the globally closest unused pair within the gate.
-  std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    for (std::size_t j = 0; j < b.size(); ++j) {
-      const double d = (a[i].position - b[j].position).norm();
-      if (d <= params.max_pair_distance) pairs.emplace_back(d, i, j);
-    }
-  std::sort(pairs.begin(), pairs.end());
   std::vector<bool> ua(a.size(), false), ub(b.size(), false);
   std::vector<PersonDetection> out;
-  for (const auto& [d, i, j] : pairs) {
-    if (ua[i] || ub[j]) continue;
+  for (const auto& [i, j] : nearestPairs(a, b, params)) {
     ua[i] = ub[j] = true;
     out.push_back(fusePair(a[i], b[j]));
   }

@@ -217,7 +217,7 @@ TrackerStatus PeopleTracker::updateInFrame(double stamp, const std::vector<Perso
 
 TrackerStatus PeopleTracker::updateLegs(double stamp, const std::vector<LegDetection>& legs,
                                         const Pose2& sensor_pose, const DetectorParams& pairing,
-                                        const LaserScan* scan) {
+                                        const LaserScan* scan, const std::vector<PersonDetection>& others) {
   const TrackerStatus status = checkTime(stamp);
   std::vector<LegDetection> in_frame;
   in_frame.reserve(legs.size());
@@ -230,6 +230,25 @@ TrackerStatus PeopleTracker::updateLegs(double stamp, const std::vector<LegDetec
   }
   std::vector<int> det_track;
   std::vector<PersonDetection> dets = pairWithTracks(in_frame, pairing, det_track);
+  if (!others.empty()) {
+    // Other sources (Stüde §2.1.3): nearest pairs fused by the information-weighted average; a fused person keeps
+    // the track its legs were given to, the others' remaining detections go through association and initiation.
+    std::vector<PersonDetection> rest;
+    for (const PersonDetection& d : others)
+      if (d.position.allFinite() && d.covariance.allFinite() &&
+          !(static_map_ && static_map_->occupiedWithin(d.position, params_.static_map_margin)))
+        rest.push_back(d);
+    std::vector<bool> fused(rest.size(), false);
+    for (const auto& [i, j] : nearestPairs(dets, rest, params_.fusion)) {
+      dets[i] = fusePair(dets[i], rest[j]);
+      fused[j] = true;
+    }
+    for (std::size_t j = 0; j < rest.size(); ++j)
+      if (!fused[j]) {
+        dets.push_back(rest[j]);
+        det_track.push_back(-1);
+      }
+  }
   std::vector<bool> used(dets.size(), false);
   for (std::size_t j = 0; j < dets.size(); ++j)
     used[j] = dets[j].confidence < params_.min_detection_confidence;

@@ -43,6 +43,30 @@ TEST(Fusion, NearestPairsFusedOthersAppended) {
   EXPECT_TRUE(fuseDetections({}).empty());
 }
 
+// gate_chi2: a camera-like detection, precise in bearing (y) and 0.4 m uncertain in range (x), pairs with the
+// laser detection along its line of sight, not with the Euclidean-nearer one beside it.
+TEST(Fusion, MahalanobisGatePairsAlongTheLongAxis) {
+  const std::vector<PersonDetection> laser{det(5.0, 0.0, 0.05), det(5.5, 0.35, 0.05)};
+  PersonDetection cam = det(5.6, 0.0, 1.0, 0.9, 1);
+  cam.covariance = Eigen::Vector2d(0.4 * 0.4, 0.05 * 0.05).asDiagonal();
+  const std::vector<PersonDetection> camera{cam};
+  FusionParams euclid;
+  euclid.max_pair_distance = 1.0;
+  const auto e = nearestPairs(laser, camera, euclid);
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0].first, 1u);  // 0.36 m beside it beats 0.6 m along the line of sight
+  FusionParams gated = euclid;
+  gated.gate_chi2 = 9.21;
+  const auto g = nearestPairs(laser, camera, gated);
+  ASSERT_EQ(g.size(), 1u);
+  EXPECT_EQ(g[0].first, 0u);
+  const PersonDetection f = fusePair(laser[0], camera[0]);
+  EXPECT_NEAR(f.position.y(), 0.0, 1e-9);
+  EXPECT_LT(f.position.x(), 5.05);  // the laser's 5 cm beat the camera's 40 cm along x
+  gated.gate_chi2 = 1.0;            // too tight for 0.6 m at 0.4 m sigma: nothing fused
+  EXPECT_TRUE(nearestPairs(laser, camera, gated).empty());
+}
+
 TEST(Fusion, TwoLaserSourcesOnOneScene) {
   // Two lasers look at the same three people from different poses; detections are transformed into the common
   // frame and fused: one fused detection per person, each more certain than either input.

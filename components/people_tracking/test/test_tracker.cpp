@@ -405,6 +405,48 @@ TEST(Tracker, WeakLegsUpdateTracksButStartNone) {
   EXPECT_TRUE(pairLegs(weak(legsAt({-3.0, 2.0})), dp).empty());
 }
 
+// Detections of another source (e.g. a camera, PeopleTracker::updateLegs `others`): a detection next to a
+// person made from legs is fused with it (one track, not two); while the legs are missed the other source alone
+// keeps the track updated under its id; a person only the other source sees starts a track.
+TEST(Tracker, OtherSourcesAreFusedWithTheLegsAndKeepTracksAlive) {
+  const DetectorParams dp;
+  PeopleTracker tracker;
+  auto camera = [](const Eigen::Vector2d& p) {
+    PersonDetection d;
+    d.position = p;
+    d.covariance = Eigen::Vector2d(0.3 * 0.3, 0.05 * 0.05).asDiagonal();  // long in range (x), short across
+    d.confidence = 0.9;
+    d.source = 1;
+    return d;
+  };
+  for (int k = 0; k <= 10; ++k) {
+    const Eigen::Vector2d person(2.0 + 0.1 * k, 0.0);
+    tracker.updateLegs(0.1 * k, legsAt(person), Pose2{}, dp, nullptr, {camera(person + Eigen::Vector2d(0.3, 0.0))});
+    ASSERT_LE(tracker.tracks().size(), 1u) << "the camera's detection must not start a second track, scan " << k;
+  }
+  ASSERT_EQ(tracker.confirmedTracks().size(), 1u);
+  const Track first = tracker.confirmedTracks()[0];
+  // Fused by information: along x the legs (sigma_pair 0.06 m) outweigh the camera's 0.3 m range error, so its
+  // 0.3 m offset moves the track by only a few centimetres.
+  EXPECT_NEAR(first.position().x(), 3.0, 0.12);
+  for (int k = 11; k <= 30; ++k) {  // legs missed (e.g. behind a bag), the camera still sees the person
+    const Eigen::Vector2d person(2.0 + 0.1 * k, 0.0);
+    tracker.updateLegs(0.1 * k, {}, Pose2{}, dp, nullptr, {camera(person)});
+    ASSERT_EQ(tracker.tracks().size(), 1u) << k;
+    EXPECT_EQ(tracker.tracks()[0].id, first.id);
+    EXPECT_DOUBLE_EQ(tracker.tracks()[0].last_update, 0.1 * k);
+  }
+  EXPECT_NEAR(tracker.tracks()[0].position().x(), 5.0, 0.15);
+  for (int k = 31; k <= 36; ++k)  // a second person only the camera sees
+    tracker.updateLegs(0.1 * k, {}, Pose2{}, dp, nullptr, {camera({2.0 + 0.1 * k, 0.0}), camera({-2.0, 3.0})});
+  ASSERT_EQ(tracker.confirmedTracks().size(), 2u);
+  // Without the camera the first track would have been deleted during the 2 s without legs.
+  PeopleTracker legs_only;
+  for (int k = 0; k <= 10; ++k) legs_only.updateLegs(0.1 * k, legsAt({2.0 + 0.1 * k, 0.0}), Pose2{}, dp);
+  for (int k = 11; k <= 30; ++k) legs_only.updateLegs(0.1 * k, {}, Pose2{}, dp);
+  EXPECT_TRUE(legs_only.tracks().empty());
+}
+
 // A person walks at 0.6 m/s, then turns by 90 degrees and speeds up to 1.8 m/s within one scan (what the 2.5 Hz
 // ETH/UCY annotations do when replayed): with the single walking model (q = 0.3) the detections after the turn
 // leave the gate and a second track takes over; the IMM keeps one track, its manoeuvre probability rises at the

@@ -37,6 +37,14 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--start") p.start = number(value());
     else if (a == "--rate") p.scan_rate = number(value());
     else if (a == "--smooth") p.trajectory_smoothing = number(value());
+    else if (a == "--camera") p.camera.fov = number(value()) * M_PI / 180.0;
+    else if (a == "--camera-range") p.camera.range = number(value());
+    else if (a == "--camera-bearing-sigma") p.camera.bearing_sigma = number(value()) * M_PI / 180.0;
+    else if (a == "--camera-range-sigma") p.camera.range_sigma = number(value());
+    else if (a == "--camera-pd") p.camera.detection_probability = number(value());
+    else if (a == "--camera-false") p.camera.false_per_scan = number(value());
+    else if (a == "--fusion-distance") p.tracker.fusion.max_pair_distance = number(value());
+    else if (a == "--fusion-gate") p.tracker.fusion.gate_chi2 = number(value());
     else if (a == "--model") p.model = value();
     else if (a == "--association") p.tracker.association = associationFromString(value());
     else if (a == "--dump") p.dump_dir = value();

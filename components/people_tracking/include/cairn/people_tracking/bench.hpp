@@ -14,6 +14,21 @@
 
 namespace cairn::people_tracking {
 
+// A second detection source for the bench (`--camera`): a person detector of another modality, e.g. a camera
+// whose image detections are projected onto the ground plane, modelled by its errors rather than rendered: it
+// reports each counted person (the laser's line-of-sight rule; no seeing over people) inside its field of view
+// with probability detection_probability, at the true position with Gaussian noise in bearing and in range
+// (proportional to the distance, as ground-plane projection is), plus Poisson false detections uniform in its
+// field. All values are assumptions (no camera data ship with cairn); docs/benchmarks.md says which were used.
+struct CameraModel {
+  double fov = 0.0;                    // rad, centred on the robot's heading; 0 = no camera
+  double range = 10.0;                 // m
+  double bearing_sigma = 0.0175;       // rad (1 deg)
+  double range_sigma = 0.05;           // relative: std = range_sigma * distance (at least 0.05 m)
+  double detection_probability = 0.9;
+  double false_per_scan = 0.05;        // mean number of false detections per scan
+};
+
 struct BenchParams {
   std::string trajectories;
   // "auto": open walled area around the trajectories, robot at its centre. Any other name needs world_geometry
@@ -42,6 +57,7 @@ struct BenchParams {
   // the detector's output, which separates tracking errors from detection and leg-pairing errors.
   bool oracle_detections = false;
   double oracle_sigma = 0.05;  // m
+  CameraModel camera{};        // fov > 0: its detections are fused with the laser's (PeopleTracker::updateLegs)
   DetectorParams detector{};
   LaserModel laser{};          // runBench sets a 360 deg scan of laser_beams beams unless laser_fov_set
   bool laser_fov_set = false;
