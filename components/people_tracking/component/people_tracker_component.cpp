@@ -159,6 +159,11 @@ class PeopleTracker : public cairn::Node {
     static_map_topic_ = declare_parameter<std::string>("static_map.topic", "", D{"OccupancyGrid (latched) whose occupied cells are not people, e.g. the SLAM map; empty = off", {}, {}, true});
     tp.static_map_margin = declare_parameter<double>("static_map.margin", tp.static_map_margin, D{"m, legs this close to an occupied cell are dropped", 0.0, 2.0, true});
     static_map_threshold_ = static_cast<int>(declare_parameter<int64_t>("static_map.occupied_threshold", 65, D{"cell value (0-100) from which a cell is occupied", 1.0, 100.0, true}));
+    // Other detection sources (Stüde §2.1.3; PeopleTracker::updateLegs `others`).
+    fusion_topic_ = declare_parameter<std::string>("fusion.topic", "", D{"PersonDetections of another source (a camera detector, a second laser) fused with the legs; empty = off", {}, {}, true});
+    fusion_max_age_ = declare_parameter<double>("fusion.max_age", fusion_max_age_, D{"s, a message is used by the first scan within this time of its stamp, once", 0.0, 5.0, true});
+    tp.fusion.max_pair_distance = declare_parameter<double>("fusion.max_pair_distance", tp.fusion.max_pair_distance, D{"m, farther detections are not fused with a person from legs", 0.0, 10.0, true});
+    tp.fusion.gate_chi2 = declare_parameter<double>("fusion.gate_chi2", tp.fusion.gate_chi2, D{"Mahalanobis gate of a pair (0: Euclidean nearest pairs, as in the thesis)", 0.0, 100.0, true});
 
     // Guide (guide.hpp; Yuan §2.2.1).
     pt::GuideParams gp;
@@ -213,6 +218,9 @@ class PeopleTracker : public cairn::Node {
     if (use_odom_)
       odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
           "odom", cairn::QoS{}, [this](const nav_msgs::msg::Odometry& m) { onOdom(m); });
+    if (!fusion_topic_.empty())
+      other_sub_ = create_subscription<pmsg::PersonDetections>(
+          fusion_topic_, cairn::QoS{}, [this](const pmsg::PersonDetections& m) { onOtherDetections(m); });
     follow_srv_ = create_service<psrv::Follow_Request, psrv::Follow_Response>(
         "people/follow", [this](const psrv::Follow_Request& rq, psrv::Follow_Response& rs) { onFollow(rq, rs); });
     CAIRN_INFO(logger(), "model " << model_path << ", association " << assoc << ", "
@@ -220,6 +228,11 @@ class PeopleTracker : public cairn::Node {
   }
 
  private:
+  struct OtherDetections {
+    double stamp;
+    std::string frame;
+    std::vector<pt::PersonDetection> detections;
+  };
   struct OdomSample {
     double stamp;
     pt::Pose2 pose;
@@ -256,6 +269,95 @@ class PeopleTracker : public cairn::Node {
       mount_fallback_logged_ = true;
       return true;
     }
+  }
+
+  // Detections of another source: checked and kept (the newest message only) until a scan uses them.
+  void onOtherDetections(const pmsg::PersonDetections& m) {
+    const double stamp = to_seconds(m.header.stamp);
+    if (!std::isfinite(stamp) || m.header.frame_id.empty()) {
+      warn("fusion_invalid", "'" + fusion_topic_ + "': message without a stamp or frame_id, ignored");
+      return;
+    }
+    OtherDetections o{stamp, m.header.frame_id, {}};
+    std::size_t bad = 0;
+    for (const auto& d : m.detections) {
+      Eigen::Matrix2d c;
+      c << d.covariance[0], d.covariance[1], d.covariance[2], d.covariance[3];
+      const bool ok = std::isfinite(d.position.x) && std::isfinite(d.position.y) && c.allFinite() && c(0, 0) > 0.0 &&
+                      c(1, 1) > 0.0 && std::abs(c(0, 1) - c(1, 0)) <= 1e-9 * (c(0, 0) + c(1, 1)) && c.determinant() > 0.0;
+      if (!ok) {
+        ++bad;
+        continue;
+      }
+      pt::PersonDetection p;
+      p.position = {d.position.x, d.position.y};
+      p.covariance = c;
+      p.confidence = std::clamp(d.confidence, 0.0, 1.0);
+      p.leg_separation = d.leg_separation;
+      p.legs = d.leg_count;
+      p.source = d.source;
+      o.detections.push_back(p);
+    }
+    if (bad > 0)
+      warn("fusion_invalid", "'" + fusion_topic_ + "': " + std::to_string(bad) + " of " +
+                                 std::to_string(m.detections.size()) +
+                                 " detections with a non-finite position or a covariance that is not symmetric positive definite, skipped");
+    other_ = std::move(o);
+  }
+
+  // The kept detections of another source for the scan at `stamp`, in the tracking frame (`frame`): used once,
+  // when their stamp is within fusion.max_age of the scan's. Their frame is the tracking frame, the robot's base
+  // frame, the scan's frame or any frame with a TF to the base frame; the robot pose is the odometry at their stamp.
+  // Approximation: people move up to max_age * 1.5 m/s between the two stamps; nothing compensates that.
+  std::vector<pt::PersonDetection> takeOtherDetections(double stamp, const std::string& scan_frame,
+                                                       const std::string& tracking_frame) {
+    if (!other_) return {};
+    if (other_->stamp > stamp + fusion_max_age_) return {};  // for a later scan
+    const OtherDetections o = std::move(*other_);
+    other_.reset();
+    if (o.stamp < stamp - fusion_max_age_) {
+      warn("fusion_stale", "'" + fusion_topic_ + "': detections " + std::to_string(stamp - o.stamp) +
+                               " s older than the scan (fusion.max_age " + std::to_string(fusion_max_age_) + "), dropped");
+      return {};
+    }
+    pt::Pose2 pose{};  // the detections' frame in the tracking frame
+    if (o.frame != tracking_frame) {
+      if (!use_odom_ && o.frame != scan_frame) {
+        warn("fusion_frame", "'" + fusion_topic_ + "': frame '" + o.frame + "' is not the tracking frame '" +
+                                 tracking_frame + "' (use_odom is false), dropped");
+        return {};
+      }
+      if (use_odom_) {
+        std::string why;
+        const auto robot = robotPoseAt(o.stamp, why);
+        if (!robot) {
+          warn("fusion_no_odom", "'" + fusion_topic_ + "': " + why + ", dropped");
+          return {};
+        }
+        pt::Pose2 mount{};
+        if (o.frame == scan_frame) {
+          mount = mount_;
+        } else if (o.frame != base_frame_) {
+          try {
+            const cairn::RigidTransform tf = tf_buffer_->lookup(base_frame_, o.frame, cairn::Time{0});
+            const Eigen::Vector3d x = tf.q * Eigen::Vector3d::UnitX();
+            mount = pt::Pose2{tf.t.x(), tf.t.y(), std::atan2(x.y(), x.x())};
+          } catch (const cairn::TransformError& e) {
+            warn("fusion_no_tf", "'" + fusion_topic_ + "': no TF " + base_frame_ + " <- " + o.frame + " (" + e.what() +
+                                     "), dropped");
+            return {};
+          }
+        }
+        pose = *robot * mount;
+      }
+    }
+    std::vector<pt::PersonDetection> out = o.detections;
+    const Eigen::Matrix2d R = pose.rotation();
+    for (auto& d : out) {
+      d.position = pose.transform(d.position);
+      d.covariance = R * d.covariance * R.transpose();
+    }
+    return out;
   }
 
   // The static map as the tracker's StaticMap: cells >= the threshold are occupied; the grid's origin pose
@@ -435,7 +537,8 @@ class PeopleTracker : public cairn::Node {
     // Published detections: the detector's own pairing (laser frame); tracking pairs the legs with the tracks.
     const std::vector<pt::PersonDetection> dets = pt::pairLegs(legs, detector_->params());
     attachStaticMap(frame);
-    const pt::TrackerStatus st = tracker_->updateLegs(scan.stamp, legs, sensor, detector_->params(), &scan);
+    const pt::TrackerStatus st = tracker_->updateLegs(scan.stamp, legs, sensor, detector_->params(), &scan,
+                                                      takeOtherDetections(scan.stamp, m.header.frame_id, frame));
     if (st.reset) warn("tracker_reset", "tracker reset: " + st.reason);
     last_tracks_ = tracker_->outputTracks();
     last_sensor_ = sensor;
@@ -549,6 +652,9 @@ class PeopleTracker : public cairn::Node {
   std::shared_ptr<cairn::TransformBuffer> tf_buffer_;
   std::string static_map_topic_;
   int static_map_threshold_ = 65;
+  std::string fusion_topic_;
+  double fusion_max_age_ = 0.15;
+  std::optional<OtherDetections> other_;  // the newest message of fusion.topic not yet used by a scan
   std::shared_ptr<pt::StaticMap> static_map_;  // shared with the tracker; its map_from_tracking is set per scan
   pt::Pose2 grid_from_map_{};
   std::string map_frame_;
@@ -572,6 +678,7 @@ class PeopleTracker : public cairn::Node {
   std::shared_ptr<cairn::Subscription<sensor_msgs::msg::LaserScan>> scan_sub_;
   std::shared_ptr<cairn::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
   std::shared_ptr<cairn::Subscription<nav_msgs::msg::OccupancyGrid>> map_sub_;
+  std::shared_ptr<cairn::Subscription<pmsg::PersonDetections>> other_sub_;
   std::shared_ptr<cairn::Service<psrv::Follow_Request, psrv::Follow_Response>> follow_srv_;
 };
 

@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -19,6 +20,7 @@
 #include "cairn/launch.hpp"
 #include "cairn/people_tracking/scene.hpp"
 #include "cairn_people_msgs/msg/GuideState.hpp"
+#include "cairn_people_msgs/msg/PersonDetections.hpp"
 #include "cairn_people_msgs/msg/TrackedPersons.hpp"
 #include "cairn_people_msgs/srv/Follow.hpp"
 #include "nav_msgs/msg/OccupancyGrid.hpp"
@@ -200,9 +202,10 @@ struct FallbackMountRig {
   }
   // Scans and odometry of `world` at t0 + k dt (k < steps), each after the reply to the previous one (reliable
   // and in order); scans within the TF timeout get no reply, so their wait is short.
-  void play(World& world, double t0, int steps, double dt) {
+  void play(World& world, double t0, int steps, double dt, const std::function<void(int k, double t)>& before_scan = {}) {
     for (int k = 0; k < steps; ++k) {
       const double t = t0 + k * dt;
+      if (before_scan) before_scan(k, t);
       pt::LaserScan s = world.scanAt(k * dt, dt);
       s.stamp = t;
       auto odom = world.odomAt(k * dt);
@@ -550,6 +553,59 @@ TEST(PeopleTrackerComponent, StaticMapDropsLegsOnMappedCells) {
   run(true, posts_with, a_with);
   EXPECT_GE(posts_without, 20) << "the posts should look like a person without the map (else the test shows nothing)";
   EXPECT_EQ(posts_with, 0) << "legs on mapped cells must not make a person";
+  EXPECT_GE(a_without, 25);
+  EXPECT_GE(a_with, 25);
+}
+
+// fusion.topic: person detections of another source (here a "camera" in the robot's base frame, which moves)
+// are fused with the legs; a person the laser cannot see (standing behind nothing the scan shows: it is simply
+// not rendered) is tracked from them alone, at its odometry-frame position. Without the parameter: no track.
+TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
+  const Eigen::Vector2d hidden(3.0, -3.0);  // odometry frame
+  auto run = [&](bool with_fusion, int& on_hidden, int& on_a) {
+    World world;
+    FallbackMountRig rig;
+    std::map<std::string, std::string> extra;
+    if (with_fusion) extra["fusion.topic"] = "people/camera_detections";
+    ASSERT_NO_FATAL_FAILURE(rig.start(with_fusion ? "people_container7" : "people_container6", world, 0.2, extra));
+    auto cam_pub = rig.sim->create_publisher<pmsg::PersonDetections>("people/camera_detections", cairn::QoS{});
+    if (with_fusion) {
+      ASSERT_TRUE(waitFor([&] { return cam_pub->inter_process_subscription_count() > 0; }, 20s));
+    }
+    const double dt = 1.0 / 15.0;
+    const int steps = 45;
+    rig.play(world, 400.0, steps, dt, [&](int k, double t) {
+      pmsg::PersonDetections m;
+      m.header.stamp = stampOf(t);
+      m.header.frame_id = "base_footprint";
+      pmsg::PersonDetection d;
+      const Eigen::Vector2d p = world.robot(k * dt).inverseTransform(hidden);
+      d.position.x = p.x();
+      d.position.y = p.y();
+      d.covariance = {0.04, 0.0, 0.0, 0.01};
+      d.confidence = 0.9;
+      d.source = 1;
+      m.detections.push_back(d);
+      pmsg::PersonDetection bad = d;  // skipped with a warning, the message's other detections still count
+      bad.covariance = {0.04, 0.0, 0.0, -1.0};
+      m.detections.push_back(bad);
+      cam_pub->publish(m);
+    });
+    rig.stop();
+    Heard& heard = rig.heard;
+    std::lock_guard l(heard.mu);
+    for (int k = 15; k < steps; ++k) {
+      const auto it = heard.tracks.find(key(stampOf(400.0 + k * dt)));
+      if (it == heard.tracks.end()) continue;
+      if (trackNear(it->second, hidden, 0.3)) ++on_hidden;
+      if (trackNear(it->second, world.personA(k * dt), 0.35)) ++on_a;
+    }
+  };
+  int hidden_without = 0, a_without = 0, hidden_with = 0, a_with = 0;
+  run(false, hidden_without, a_without);
+  run(true, hidden_with, a_with);
+  EXPECT_EQ(hidden_without, 0) << "nothing on the laser is there";
+  EXPECT_GE(hidden_with, 25) << "the other source's person must be tracked at its odometry-frame position";
   EXPECT_GE(a_without, 25);
   EXPECT_GE(a_with, 25);
 }
