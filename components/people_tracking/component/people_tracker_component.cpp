@@ -50,6 +50,12 @@ using cairn::yaw_of;
 
 double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
+// The planar part of a TF transform (translation x, y and the yaw of its x axis).
+pt::Pose2 planar(const cairn::RigidTransform& tf) {
+  const Eigen::Vector3d x = tf.q * Eigen::Vector3d::UnitX();
+  return pt::Pose2{tf.t.x(), tf.t.y(), std::atan2(x.y(), x.x())};
+}
+
 // Directory of this component library (for models installed next to it: <prefix>/lib/cairn_components/x.so).
 std::filesystem::path libraryDir() {
   Dl_info info{};
@@ -252,9 +258,7 @@ class PeopleTracker : public cairn::Node {
       return true;
     }
     try {
-      const cairn::RigidTransform tf = tf_buffer_->lookup(base_frame_, laser_frame, cairn::Time{0});
-      const Eigen::Vector3d x = tf.q * Eigen::Vector3d::UnitX();
-      mount_ = pt::Pose2{tf.t.x(), tf.t.y(), std::atan2(x.y(), x.x())};
+      mount_ = planar(tf_buffer_->lookup(base_frame_, laser_frame, cairn::Time{0}));
       mount_from_tf_ = true;
       CAIRN_INFO(logger(), "laser mount from TF " << base_frame_ << " <- " << laser_frame << ": (" << mount_.x << ", "
                                                   << mount_.y << ", " << mount_.theta << ")");
@@ -320,44 +324,31 @@ class PeopleTracker : public cairn::Node {
                                " s older than the scan (fusion.max_age " + std::to_string(fusion_max_age_) + "), dropped");
       return {};
     }
-    pt::Pose2 pose{};  // the detections' frame in the tracking frame
-    if (o.frame != tracking_frame) {
-      if (!use_odom_ && o.frame != scan_frame) {
-        warn("fusion_frame", "'" + fusion_topic_ + "': frame '" + o.frame + "' is not the tracking frame '" +
-                                 tracking_frame + "' (use_odom is false), dropped");
+    if (o.frame == tracking_frame) return o.detections;
+    if (!use_odom_) {  // tracking in the laser frame: nothing else to transform with
+      warn("fusion_frame", "'" + fusion_topic_ + "': frame '" + o.frame + "' is not the tracking frame '" +
+                               tracking_frame + "' (use_odom is false), dropped");
+      return {};
+    }
+    std::string why;
+    const auto robot = robotPoseAt(o.stamp, why);
+    if (!robot) {
+      warn("fusion_no_odom", "'" + fusion_topic_ + "': " + why + ", dropped");
+      return {};
+    }
+    pt::Pose2 mount{};  // the detections' frame in the base frame
+    if (o.frame == scan_frame) {
+      mount = mount_;
+    } else if (o.frame != base_frame_) {
+      try {
+        mount = planar(tf_buffer_->lookup(base_frame_, o.frame, cairn::Time{0}));
+      } catch (const cairn::TransformError& e) {
+        warn("fusion_no_tf", "'" + fusion_topic_ + "': no TF " + base_frame_ + " <- " + o.frame + " (" + e.what() +
+                                 "), dropped");
         return {};
       }
-      if (use_odom_) {
-        std::string why;
-        const auto robot = robotPoseAt(o.stamp, why);
-        if (!robot) {
-          warn("fusion_no_odom", "'" + fusion_topic_ + "': " + why + ", dropped");
-          return {};
-        }
-        pt::Pose2 mount{};
-        if (o.frame == scan_frame) {
-          mount = mount_;
-        } else if (o.frame != base_frame_) {
-          try {
-            const cairn::RigidTransform tf = tf_buffer_->lookup(base_frame_, o.frame, cairn::Time{0});
-            const Eigen::Vector3d x = tf.q * Eigen::Vector3d::UnitX();
-            mount = pt::Pose2{tf.t.x(), tf.t.y(), std::atan2(x.y(), x.x())};
-          } catch (const cairn::TransformError& e) {
-            warn("fusion_no_tf", "'" + fusion_topic_ + "': no TF " + base_frame_ + " <- " + o.frame + " (" + e.what() +
-                                     "), dropped");
-            return {};
-          }
-        }
-        pose = *robot * mount;
-      }
     }
-    std::vector<pt::PersonDetection> out = o.detections;
-    const Eigen::Matrix2d R = pose.rotation();
-    for (auto& d : out) {
-      d.position = pose.transform(d.position);
-      d.covariance = R * d.covariance * R.transpose();
-    }
-    return out;
+    return pt::transformDetections(o.detections, *robot * mount);
   }
 
   // The static map as the tracker's StaticMap: cells >= the threshold are occupied; the grid's origin pose
@@ -391,9 +382,7 @@ class PeopleTracker : public cairn::Node {
     if (!map_frame_.empty() && map_frame_ != tracking_frame) {
       try {
         if (!tf_buffer_) throw cairn::TransformError("no TF listener (use_odom is false)");
-        const cairn::RigidTransform tf = tf_buffer_->lookup(map_frame_, tracking_frame, cairn::Time{0});
-        const Eigen::Vector3d x = tf.q * Eigen::Vector3d::UnitX();
-        map_from_tracking = pt::Pose2{tf.t.x(), tf.t.y(), std::atan2(x.y(), x.x())};
+        map_from_tracking = planar(tf_buffer_->lookup(map_frame_, tracking_frame, cairn::Time{0}));
       } catch (const cairn::TransformError& e) {
         warn("map_no_tf", "static map: no TF " + map_frame_ + " <- " + tracking_frame + " (" + e.what() +
                               "), scan processed without it");

@@ -129,9 +129,6 @@ std::uint64_t mix(std::uint64_t a, std::uint64_t b) {
   return z ^ (z >> 31);
 }
 
-}  // namespace
-
-namespace {
 // The camera's detections (tracking frame) of the counted people `gt` seen from `pose`; see CameraModel.
 std::vector<PersonDetection> cameraDetections(const CameraModel& cam, const Pose2& pose, const std::vector<MotObject>& gt,
                                               std::mt19937_64& rng) {
@@ -342,12 +339,8 @@ BenchResult runBench(const BenchParams& params) {
     } else if (params.track_aware_pairing) {
       tracker.updateLegs(t, legs, pose, params.detector, &sim.scan, cameraDetections(cam, pose, gt, camera_rng));
     } else if (cam.fov > 0.0) {
-      std::vector<PersonDetection> laser = dets;
-      for (auto& d : laser) {
-        d.position = pose.transform(d.position);
-        d.covariance = pose.rotation() * d.covariance * pose.rotation().transpose();
-      }
-      tracker.updateInFrame(t, fuseDetections({laser, cameraDetections(cam, pose, gt, camera_rng)}, params.tracker.fusion));
+      tracker.updateInFrame(t, fuseDetections({transformDetections(dets, pose), cameraDetections(cam, pose, gt, camera_rng)},
+                                              params.tracker.fusion));
     } else {
       tracker.update(t, dets, pose);
     }

@@ -81,4 +81,13 @@ std::vector<PersonDetection> pairLegs(const std::vector<LegDetection>& legs, con
   return out;
 }
 
+std::vector<PersonDetection> transformDetections(std::vector<PersonDetection> detections, const Pose2& pose) {
+  const Eigen::Matrix2d R = pose.rotation();
+  for (auto& d : detections) {
+    d.position = pose.transform(d.position);
+    d.covariance = R * d.covariance * R.transpose();
+  }
+  return detections;
+}
+
 }  // namespace cairn::people_tracking

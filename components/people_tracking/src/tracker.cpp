@@ -48,13 +48,7 @@ std::vector<Track> PeopleTracker::outputTracks() const {
 
 TrackerStatus PeopleTracker::update(double stamp, const std::vector<PersonDetection>& detections,
                                     const Pose2& sensor_pose) {
-  std::vector<PersonDetection> in_frame = detections;
-  const Eigen::Matrix2d R = sensor_pose.rotation();
-  for (auto& d : in_frame) {
-    d.position = sensor_pose.transform(d.position);
-    d.covariance = R * d.covariance * R.transpose();
-  }
-  return updateInFrame(stamp, in_frame);
+  return updateInFrame(stamp, transformDetections(detections, sensor_pose));
 }
 
 namespace {

@@ -67,4 +67,7 @@ PersonDetection personFromLeg(const LegDetection& leg, const DetectorParams& par
 // skipped); exposed for tests and other sources.
 std::vector<PersonDetection> pairLegs(const std::vector<LegDetection>& legs, const DetectorParams& params);
 
+// The detections moved from a frame into the one where that frame has `pose` (positions and covariances).
+std::vector<PersonDetection> transformDetections(std::vector<PersonDetection> detections, const Pose2& pose);
+
 }  // namespace cairn::people_tracking
