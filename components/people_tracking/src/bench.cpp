@@ -186,6 +186,10 @@ BenchResult runBench(const BenchParams& params) {
       !(cam.false_per_scan >= 0.0 && cam.false_per_scan <= 100.0))
     throw InputError("camera model out of range (fov [0, 360] deg, range (0, 100] m, bearing sigma [0, 57) deg, "
                      "range sigma [0, 1), detection probability [0, 1], false detections [0, 100] per scan)");
+  const FusionParams& fusion = params.tracker.fusion;
+  if (!(fusion.max_pair_distance >= 0.0 && fusion.max_pair_distance <= 100.0) ||
+      !(fusion.gate_chi2 >= 0.0 && fusion.gate_chi2 <= 1000.0))
+    throw InputError("fusion: --fusion-distance must be in [0, 100] m and --fusion-gate in [0, 1000]");
   if (params.oracle_detections && !(params.oracle_sigma > 0.0 && params.oracle_sigma < 10.0))
     throw InputError("oracle sigma must be in (0, 10) m");
   const TrajectorySet traj = [&] {

@@ -29,6 +29,8 @@ expect_error("option --trajectory-offset expects a finite number, got 'nan'" ben
 expect_error("option --beams expects an integer in [8, 100000], got '1080.5'" bench --world auto --trajectories bad_tracks.csv --beams 1080.5)
 expect_error("option --beams expects an integer in [8, 100000], got '4'" bench --world auto --trajectories bad_tracks.csv --beams 4)
 expect_error("trajectory smoothing (--smooth) must be in [0, 10] s, got -1" bench --world auto --trajectories bad_tracks.csv --smooth -1)
+expect_error("fusion: --fusion-distance must be in [0, 100] m" bench --world auto --trajectories bad_tracks.csv --fusion-gate -1)
+expect_error("camera model out of range" bench --world auto --trajectories bad_tracks.csv --camera 400)
 expect_error("option --confirm-hits expects an integer in [1, 1000], got '2.5'" bench --world auto --trajectories bad_tracks.csv --confirm-hits 2.5)
 expect_error("option --seed expects an integer in [0, 9223372036854775807], got '99999999999999999999'" bench --world auto --trajectories bad_tracks.csv --seed 99999999999999999999)
 expect_error("option --seed expects an integer in [0, 9223372036854775807], got '-1'" bench --world auto --trajectories bad_tracks.csv --seed -1)

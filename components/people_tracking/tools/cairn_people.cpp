@@ -94,7 +94,7 @@ void usage() {
       "        [--maneuver-noise Q] [--maneuver-rate R] [--maneuver-end-rate R]   (IMM; 0 = one walking mode)\n"
       "        second source: [--camera FOV_DEG] [--camera-range M] [--camera-bearing-sigma DEG] [--camera-range-sigma R]\n"
       "        [--camera-pd P] [--camera-false N] [--fusion-distance M] [--fusion-gate CHI2]\n"
-"        diagnostic: [--oracle-detections] [--oracle-sigma M]   (true positions instead of the detector)\n"
+      "        diagnostic: [--oracle-detections] [--oracle-sigma M]   (true positions instead of the detector)\n"
       "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--robot follow|route]\n"
       "             [--keep-spurs] [--follow-distance M] [--fov-deg 360] [--range-max 20] [--mask tangents|inside] [--model FILE]\n"
       "             [--heading-drift R] [--scale-error E] [--max-duration S] [--json]");
