@@ -9,8 +9,10 @@
 #include <cstdlib>
 #include <deque>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -113,15 +115,24 @@ class PeopleTracker : public cairn::Node {
     sp.min_points = static_cast<std::size_t>(declare_parameter<int64_t>("segmentation.min_points", static_cast<int64_t>(sp.min_points), D{"smallest cluster", 1.0, 1000.0, true}));
     sp.max_points = static_cast<std::size_t>(declare_parameter<int64_t>("segmentation.max_points", static_cast<int64_t>(sp.max_points), D{"largest cluster", 1.0, 100000.0, true}));
     sp.jump_cap = declare_parameter<double>("segmentation.jump_cap", sp.jump_cap, D{"m, neighbour jump when there is no neighbour", 0.0, 100.0, true});
-    dp.min_leg_confidence = declare_parameter<double>("detector.min_leg_confidence", dp.min_leg_confidence, D{"classifier score to accept a leg", 0.0, 1.0, true});
-    dp.track_leg_confidence = declare_parameter<double>("detector.track_leg_confidence", dp.track_leg_confidence, D{"weaker legs that may only update existing tracks", 0.0, 1.0, true});
-    dp.max_range = declare_parameter<double>("detector.max_range", dp.max_range, D{"m, clusters beyond are ignored", 0.1, 100.0, true});
-    dp.max_leg_width = declare_parameter<double>("detector.max_leg_width", dp.max_leg_width, D{"m, wider clusters are not legs", 0.01, 2.0, true});
-    dp.leg_center_offset = declare_parameter<double>("detector.leg_center_offset", dp.leg_center_offset, D{"m, leg centre behind the visible surface", 0.0, 0.5, true});
-    dp.max_leg_pair_distance = declare_parameter<double>("detector.max_leg_pair_distance", dp.max_leg_pair_distance, D{"m, legs closer than this are paired", 0.0, 3.0, true});
-    dp.single_leg_min_confidence = declare_parameter<double>("detector.single_leg_min_confidence", dp.single_leg_min_confidence, D{"score an unpaired cluster needs to become a person", 0.0, 1.0, true});
-    dp.sigma_pair = declare_parameter<double>("detector.sigma_pair", dp.sigma_pair, D{"m, position std of a paired-leg person", 1e-4, 5.0, true});
-    dp.sigma_single = declare_parameter<double>("detector.sigma_single", dp.sigma_single, D{"m, position std of a single-cluster person", 1e-4, 5.0, true});
+    dp.min_leg_confidence = declareRuntime<double>("detector.min_leg_confidence", dp.min_leg_confidence, D{"classifier score to accept a leg", 0.0, 1.0, false},
+        [this](double x) { detector_params_.min_leg_confidence = x; });
+    dp.track_leg_confidence = declareRuntime<double>("detector.track_leg_confidence", dp.track_leg_confidence, D{"weaker legs that may only update existing tracks", 0.0, 1.0, false},
+        [this](double x) { detector_params_.track_leg_confidence = x; });
+    dp.max_range = declareRuntime<double>("detector.max_range", dp.max_range, D{"m, clusters beyond are ignored", 0.1, 100.0, false},
+        [this](double x) { detector_params_.max_range = x; });
+    dp.max_leg_width = declareRuntime<double>("detector.max_leg_width", dp.max_leg_width, D{"m, wider clusters are not legs", 0.01, 2.0, false},
+        [this](double x) { detector_params_.max_leg_width = x; });
+    dp.leg_center_offset = declareRuntime<double>("detector.leg_center_offset", dp.leg_center_offset, D{"m, leg centre behind the visible surface", 0.0, 0.5, false},
+        [this](double x) { detector_params_.leg_center_offset = x; });
+    dp.max_leg_pair_distance = declareRuntime<double>("detector.max_leg_pair_distance", dp.max_leg_pair_distance, D{"m, legs closer than this are paired", 0.0, 3.0, false},
+        [this](double x) { detector_params_.max_leg_pair_distance = x; });
+    dp.single_leg_min_confidence = declareRuntime<double>("detector.single_leg_min_confidence", dp.single_leg_min_confidence, D{"score an unpaired cluster needs to become a person", 0.0, 1.0, false},
+        [this](double x) { detector_params_.single_leg_min_confidence = x; });
+    dp.sigma_pair = declareRuntime<double>("detector.sigma_pair", dp.sigma_pair, D{"m, position std of a paired-leg person", 1e-4, 5.0, false},
+        [this](double x) { detector_params_.sigma_pair = x; });
+    dp.sigma_single = declareRuntime<double>("detector.sigma_single", dp.sigma_single, D{"m, position std of a single-cluster person", 1e-4, 5.0, false},
+        [this](double x) { detector_params_.sigma_single = x; });
 
     // Tracker (tracker.hpp; Stüde §2.1.3).
     pt::TrackerParams tp;
@@ -173,38 +184,46 @@ class PeopleTracker : public cairn::Node {
 
     // Guide (guide.hpp; Yuan §2.2.1).
     pt::GuideParams gp;
-    gp.field_radius = declare_parameter<double>("guide.field_radius", gp.field_radius, D{"m, radius of the field in front of the robot (Yuan: 8 m)", 0.1, 100.0, true});
-    gp.field_half_angle = M_PI / 180.0 * declare_parameter<double>("guide.field_half_angle_deg", 90.0, D{"deg, half opening of the field (Yuan: semicircle)", 1.0, 180.0, true});
-    gp.select_max_distance = declare_parameter<double>("guide.select_max_distance", gp.select_max_distance, D{"m, follow(closest) considers people this close", 0.1, 100.0, true});
-    gp.lost_timeout = declare_parameter<double>("guide.lost_timeout", gp.lost_timeout, D{"s unmatched until Person Lost", 0.0, 60.0, true});
-    gp.auto_reacquire = declare_parameter<bool>("guide.auto_reacquire", gp.auto_reacquire, D{"re-acquire a track appearing near the lost guide", {}, {}, true});
-    gp.reacquire_radius = declare_parameter<double>("guide.reacquire_radius", gp.reacquire_radius, D{"m around the last guide position", 0.0, 20.0, true});
-    gp.reacquire_window = declare_parameter<double>("guide.reacquire_window", gp.reacquire_window, D{"s before Person Lost falls back to Search", 0.0, 3600.0, true});
+    gp.field_radius = declareRuntime<double>("guide.field_radius", gp.field_radius, D{"m, radius of the field in front of the robot (Yuan: 8 m)", 0.1, 100.0, false},
+        [this](double x) { guide_params_.field_radius = x; });
+    gp.field_half_angle = M_PI / 180.0 * declareRuntime<double>("guide.field_half_angle_deg", 90.0, D{"deg, half opening of the field (Yuan: semicircle)", 1.0, 180.0, false},
+        [this](double deg) { guide_params_.field_half_angle = M_PI / 180.0 * deg; });
+    gp.select_max_distance = declareRuntime<double>("guide.select_max_distance", gp.select_max_distance, D{"m, follow(closest) considers people this close", 0.1, 100.0, false},
+        [this](double x) { guide_params_.select_max_distance = x; });
+    gp.lost_timeout = declareRuntime<double>("guide.lost_timeout", gp.lost_timeout, D{"s unmatched until Person Lost", 0.0, 60.0, false},
+        [this](double x) { guide_params_.lost_timeout = x; });
+    gp.auto_reacquire = declareRuntime<bool>("guide.auto_reacquire", gp.auto_reacquire, D{"re-acquire a track appearing near the lost guide", {}, {}, false},
+        [this](bool x) { guide_params_.auto_reacquire = x; });
+    gp.reacquire_radius = declareRuntime<double>("guide.reacquire_radius", gp.reacquire_radius, D{"m around the last guide position", 0.0, 20.0, false},
+        [this](double x) { guide_params_.reacquire_radius = x; });
+    gp.reacquire_window = declareRuntime<double>("guide.reacquire_window", gp.reacquire_window, D{"s before Person Lost falls back to Search", 0.0, 3600.0, false},
+        [this](double x) { guide_params_.reacquire_window = x; });
 
     // Masking (masking.hpp; Yuan §3.2.1).
-    mask_mode_ = declare_parameter<std::string>("mask.people", "all", D{"whom scan_filtered hides: all (published tracks) | guide (Yuan §3.2.1) | none", {}, {}, true});
-    if (mask_mode_ != "all" && mask_mode_ != "guide" && mask_mode_ != "none")
-      throw std::invalid_argument("parameter 'mask.people' must be all, guide or none, got '" + mask_mode_ + "'");
-    mask_.leg_radius = declare_parameter<double>("mask.leg_radius", mask_.leg_radius, D{"m, added to half the leg separation", 0.0, 1.0, true});
-    mask_.margin = declare_parameter<double>("mask.margin", mask_.margin, D{"m, safety margin of r_P", 0.0, 2.0, true});
-    mask_.default_radius = declare_parameter<double>("mask.default_radius", mask_.default_radius, D{"m, r_P when the leg separation is unknown", 0.05, 3.0, true});
-    mask_.min_radius = declare_parameter<double>("mask.min_radius", mask_.min_radius, D{"m, smallest r_P", 0.0, 3.0, true});
-    const std::string mask_kind = declare_parameter<std::string>("mask.mode", "inside", D{"inside: only returns inside the circle | tangents: every beam between the tangents (Yuan §3.2.1)", {}, {}, true});
-    try {
-      mask_kind_ = pt::parseMaskMode(mask_kind, "parameter 'mask.mode'");
-    } catch (const pt::InputError& e) {
-      throw std::invalid_argument(e.what());
-    }
+    mask_mode_ = declareRuntime<std::string>("mask.people", "all", D{"whom scan_filtered hides: all (published tracks) | guide (Yuan §3.2.1) | none", {}, {}, false},
+        [this](const std::string& x) { mask_mode_ = x; });
+    if (auto bad = checkChoice("mask.people", mask_mode_)) throw std::invalid_argument(*bad);
+    mask_.leg_radius = declareRuntime<double>("mask.leg_radius", mask_.leg_radius, D{"m, added to half the leg separation", 0.0, 1.0, false},
+        [this](double x) { mask_.leg_radius = x; });
+    mask_.margin = declareRuntime<double>("mask.margin", mask_.margin, D{"m, safety margin of r_P", 0.0, 2.0, false},
+        [this](double x) { mask_.margin = x; });
+    mask_.default_radius = declareRuntime<double>("mask.default_radius", mask_.default_radius, D{"m, r_P when the leg separation is unknown", 0.05, 3.0, false},
+        [this](double x) { mask_.default_radius = x; });
+    mask_.min_radius = declareRuntime<double>("mask.min_radius", mask_.min_radius, D{"m, smallest r_P", 0.0, 3.0, false},
+        [this](double x) { mask_.min_radius = x; });
+    const std::string mask_kind = declareRuntime<std::string>("mask.mode", "inside", D{"inside: only returns inside the circle | tangents: every beam between the tangents (Yuan §3.2.1)", {}, {}, false},
+        [this](const std::string& x) { mask_kind_ = pt::parseMaskMode(x, "parameter 'mask.mode'"); });
+    if (auto bad = checkChoice("mask.mode", mask_kind)) throw std::invalid_argument(*bad);
+    mask_kind_ = pt::parseMaskMode(mask_kind, "parameter 'mask.mode'");
 
     // The model is loaded in a dry run too, so `cairn launch --check` reports a missing or corrupt model file.
     const std::string model_path = resolveModelPath(model_param);
-    std::shared_ptr<const pt::LegClassifier> classifier;
     try {
-      classifier = std::make_shared<const pt::LegClassifier>(pt::LegClassifier::load(model_path));
+      classifier_ = std::make_shared<const pt::LegClassifier>(pt::LegClassifier::load(model_path));
     } catch (const pt::InputError& e) {
       throw std::invalid_argument(std::string("model_file: ") + e.what());
     }
-    detector_ = std::make_unique<pt::PersonDetector>(classifier, dp);
+    detector_ = std::make_unique<pt::PersonDetector>(classifier_, dp);
     tracker_ = std::make_unique<pt::PeopleTracker>(tp);
     if (use_odom_) {
       tf_buffer_ = std::make_shared<cairn::TransformBuffer>(30.0);
@@ -229,11 +248,59 @@ class PeopleTracker : public cairn::Node {
           fusion_topic_, cairn::QoS{}, [this](const pmsg::PersonDetections& m) { onOtherDetections(m); });
     follow_srv_ = create_service<psrv::Follow_Request, psrv::Follow_Response>(
         "people/follow", [this](const psrv::Follow_Request& rq, psrv::Follow_Response& rs) { onFollow(rq, rs); });
+    // Run-time changes (`cairn param set`) of the detector.*, guide.* and mask.* parameters: checked here, applied
+    // before the next scan (on the executor thread that processes scans, so nothing changes during one).
+    on_parameter_change([this](const std::string& name, const cairn::ParameterValue& v) -> std::optional<std::string> {
+      if (!runtime_setters_.count(name)) return std::nullopt;
+      if (const auto* text = std::get_if<std::string>(&v))
+        if (auto bad = checkChoice(name, *text)) return bad;
+      std::lock_guard l(pending_mu_);
+      pending_[name] = v;
+      return std::nullopt;
+    });
     CAIRN_INFO(logger(), "model " << model_path << ", association " << assoc << ", "
                                   << (use_odom_ ? "tracking in the odometry frame" : "tracking in the laser frame"));
   }
 
  private:
+  // Declares a parameter that may change at run time; `apply` sets it on the staged detector/guide parameters or
+  // the mask settings when applyPendingParameters() runs.
+  template <class T, class F>
+  T declareRuntime(const std::string& name, const T& def, const cairn::ParameterDescriptor& desc, F apply) {
+    const T value = declare_parameter<T>(name, def, desc);
+    runtime_setters_[name] = [name, apply](const cairn::ParameterValue& v) { apply(cairn::parameter_as<T>(v, name)); };
+    return value;
+  }
+
+  // The string parameters' choices; the reason when `value` is not one of them.
+  static std::optional<std::string> checkChoice(const std::string& name, const std::string& value) {
+    if (name == "mask.people" && value != "all" && value != "guide" && value != "none")
+      return "parameter 'mask.people' must be all, guide or none, got '" + value + "'";
+    if (name == "mask.mode" && value != "inside" && value != "tangents")
+      return "parameter 'mask.mode' must be inside or tangents, got '" + value + "'";
+    return std::nullopt;
+  }
+
+  // Parameter changes since the last scan, in the order of their names.
+  void applyPendingParameters() {
+    std::map<std::string, cairn::ParameterValue> pending;
+    {
+      std::lock_guard l(pending_mu_);
+      pending.swap(pending_);
+    }
+    if (pending.empty()) return;
+    detector_params_ = detector_->params();
+    guide_params_ = guide_->params();
+    bool detector_changed = false;
+    for (const auto& [name, value] : pending) {
+      runtime_setters_.at(name)(value);
+      detector_changed |= name.rfind("detector.", 0) == 0;
+      CAIRN_INFO(logger(), "parameter " << name << " := " << cairn::to_string(value) << " from this scan on");
+    }
+    if (detector_changed) detector_ = std::make_unique<pt::PersonDetector>(classifier_, detector_params_);
+    guide_->setParams(guide_params_);
+  }
+
   struct OtherDetections {
     double stamp;
     std::string frame;
@@ -468,6 +535,7 @@ class PeopleTracker : public cairn::Node {
   }
 
   void onScan(const sensor_msgs::msg::LaserScan& m) {
+    applyPendingParameters();
     pt::LaserScan scan;
     scan.stamp = to_seconds(m.header.stamp);
     scan.angle_min = m.angle_min;
@@ -651,7 +719,13 @@ class PeopleTracker : public cairn::Node {
   std::string mask_mode_;
   pt::MaskParams mask_;
   pt::MaskMode mask_kind_ = pt::MaskMode::kReturnsInside;
+  std::shared_ptr<const pt::LegClassifier> classifier_;
   std::unique_ptr<pt::PersonDetector> detector_;
+  pt::DetectorParams detector_params_;  // staged by the run-time setters (applyPendingParameters)
+  pt::GuideParams guide_params_;
+  std::map<std::string, std::function<void(const cairn::ParameterValue&)>> runtime_setters_;
+  std::mutex pending_mu_;
+  std::map<std::string, cairn::ParameterValue> pending_;  // accepted changes not yet applied
   std::unique_ptr<pt::PeopleTracker> tracker_;
   std::unique_ptr<pt::GuideTracker> guide_;
   std::deque<OdomSample> odom_;

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "cairn/test_support.hpp"
+#include "cairn/parameter_msgs.hpp"
 #include "cairn/container.hpp"
 #include "cairn/launch.hpp"
 #include "cairn/people_tracking/scene.hpp"
@@ -24,6 +25,7 @@
 #include "cairn_people_msgs/msg/TrackedPersons.hpp"
 #include "cairn_people_msgs/srv/Follow.hpp"
 #include "nav_msgs/msg/OccupancyGrid.hpp"
+#include "rcl_interfaces/srv/SetParameters.hpp"
 #include "nav_msgs/msg/Odometry.hpp"
 #include "sensor_msgs/msg/LaserScan.hpp"
 #include "tf2_msgs/msg/TFMessage.hpp"
@@ -608,6 +610,59 @@ TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
   EXPECT_GE(hidden_with, 25) << "the other source's person must be tracked at its odometry-frame position";
   EXPECT_GE(a_without, 25);
   EXPECT_GE(a_with, 25);
+}
+
+// detector.*, guide.* and mask.* change at run time over the parameter services (`cairn param set`): here the
+// detection range shrinks to 0.1 m mid-run and person A's track goes; a bad choice and a read-only parameter are
+// refused with a reason, and the component keeps running.
+TEST(PeopleTrackerComponent, DetectorParametersChangeAtRunTime) {
+  World world;
+  FallbackMountRig rig;
+  ASSERT_NO_FATAL_FAILURE(rig.start("people_container8", world, 0.2));
+  auto set = rig.sim->create_client<rcl_interfaces::srv::SetParameters_Request, rcl_interfaces::srv::SetParameters_Response>(
+      "/people_tracker/set_parameters");
+  auto request = [](const std::string& name, const cairn::ParameterValue& v) {
+    rcl_interfaces::srv::SetParameters_Request r;
+    rcl_interfaces::msg::Parameter p;
+    p.name = name;
+    p.value = cairn::to_parameter_msg(v);
+    r.parameters.push_back(p);
+    return r;
+  };
+  const double dt = 1.0 / 15.0;
+  const int steps = 60, change = 30;
+  std::optional<rcl_interfaces::srv::SetParameters_Response> bad_choice, read_only, range;
+  rig.play(world, 500.0, steps, dt, [&](int k, double) {
+    if (k != change) return;
+    bad_choice = set->call(request("mask.people", std::string("everyone")), 10s);
+    read_only = set->call(request("tracker.process_noise", 1.0), 10s);
+    range = set->call(request("detector.max_range", 0.1), 10s);
+  });
+  rig.stop();
+  ASSERT_TRUE(bad_choice && read_only && range);
+  ASSERT_EQ(bad_choice->results.size(), 1u);
+  EXPECT_FALSE(bad_choice->results[0].successful);
+  EXPECT_NE(bad_choice->results[0].reason.find("must be all, guide or none"), std::string::npos) << bad_choice->results[0].reason;
+  ASSERT_EQ(read_only->results.size(), 1u);
+  EXPECT_FALSE(read_only->results[0].successful);
+  ASSERT_EQ(range->results.size(), 1u);
+  EXPECT_TRUE(range->results[0].successful) << range->results[0].reason;
+  Heard& heard = rig.heard;
+  std::lock_guard l(heard.mu);
+  int before = 0, after = 0, processed_after = 0;
+  for (int k = 15; k < steps; ++k) {
+    const auto it = heard.tracks.find(key(stampOf(500.0 + k * dt)));
+    if (it == heard.tracks.end()) continue;
+    const bool on_a = trackNear(it->second, world.personA(k * dt), 0.35).has_value();
+    if (k < change) before += on_a;
+    if (k >= change + 10) {
+      after += on_a;
+      ++processed_after;
+    }
+  }
+  EXPECT_GE(before, 12) << "person A tracked before the change";
+  EXPECT_GE(processed_after, 15) << "scans still processed after the change";
+  EXPECT_EQ(after, 0) << "no legs beyond 0.1 m after the change, so no track on person A";
 }
 
 namespace {

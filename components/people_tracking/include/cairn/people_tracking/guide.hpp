@@ -48,6 +48,8 @@ class GuideTracker {
 
   GuideStatus update(const std::vector<Track>& tracks, const Pose2& robot, double stamp);
   [[nodiscard]] GuideState state() const { return state_; }
+  [[nodiscard]] const GuideParams& params() const { return params_; }
+  void setParams(const GuideParams& params) { params_ = params; }  // from the next call on; the state is kept
   [[nodiscard]] int guideId() const { return guide_id_; }
 
  private:
