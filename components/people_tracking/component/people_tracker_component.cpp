@@ -276,8 +276,13 @@ class PeopleTracker : public cairn::Node {
   static std::optional<std::string> checkChoice(const std::string& name, const std::string& value) {
     if (name == "mask.people" && value != "all" && value != "guide" && value != "none")
       return "parameter 'mask.people' must be all, guide or none, got '" + value + "'";
-    if (name == "mask.mode" && value != "inside" && value != "tangents")
-      return "parameter 'mask.mode' must be inside or tangents, got '" + value + "'";
+    if (name == "mask.mode") {
+      try {
+        pt::parseMaskMode(value, "parameter 'mask.mode'");
+      } catch (const pt::InputError& e) {
+        return std::string(e.what());
+      }
+    }
     return std::nullopt;
   }
 
