@@ -339,7 +339,9 @@ BenchResult runBench(const BenchParams& params) {
         d.legs = 2;
         truth.push_back(d);
       }
-      tracker.updateInFrame(t, truth);
+      // As another source's detections with no legs, so the tracker still reads the scan for occlusion and free
+      // space (its negative information is part of the tracking core).
+      tracker.updateLegs(t, {}, pose, params.detector, &sim.scan, truth);
     } else if (params.track_aware_pairing) {
       tracker.updateLegs(t, legs, pose, params.detector, &sim.scan, cameraDetections(cam, pose, gt, camera_rng));
     } else if (cam.fov > 0.0) {

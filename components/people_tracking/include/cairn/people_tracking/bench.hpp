@@ -53,8 +53,9 @@ struct BenchParams {
   std::string model;           // classifier file; empty = shipped leg_adaboost_arras14.yml
   TrackerParams tracker{};
   bool track_aware_pairing = true;  // legs paired with the tracks (updateLegs); false: detector's pairing (update)
-  // Diagnostic: the tracker gets the counted people's true positions plus oracle_sigma noise (update) instead of
-  // the detector's output, which separates tracking errors from detection and leg-pairing errors.
+  // Diagnostic: the tracker gets the counted people's true positions plus oracle_sigma noise instead of the
+  // detector's legs (updateLegs with no legs and the positions as another source, so occlusion and free space are
+  // still read from the scan), which separates tracking errors from detection and leg-pairing errors.
   bool oracle_detections = false;
   double oracle_sigma = 0.05;  // m
   CameraModel camera{};        // fov > 0: its detections are fused with the laser's (PeopleTracker::updateLegs)
