@@ -115,24 +115,24 @@ class PeopleTracker : public cairn::Node {
     sp.min_points = static_cast<std::size_t>(declare_parameter<int64_t>("segmentation.min_points", static_cast<int64_t>(sp.min_points), D{"smallest cluster", 1.0, 1000.0, true}));
     sp.max_points = static_cast<std::size_t>(declare_parameter<int64_t>("segmentation.max_points", static_cast<int64_t>(sp.max_points), D{"largest cluster", 1.0, 100000.0, true}));
     sp.jump_cap = declare_parameter<double>("segmentation.jump_cap", sp.jump_cap, D{"m, neighbour jump when there is no neighbour", 0.0, 100.0, true});
-    dp.min_leg_confidence = declareRuntime<double>("detector.min_leg_confidence", dp.min_leg_confidence, D{"classifier score to accept a leg", 0.0, 1.0, false},
-        [this](double x) { detector_params_.min_leg_confidence = x; });
-    dp.track_leg_confidence = declareRuntime<double>("detector.track_leg_confidence", dp.track_leg_confidence, D{"weaker legs that may only update existing tracks", 0.0, 1.0, false},
-        [this](double x) { detector_params_.track_leg_confidence = x; });
-    dp.max_range = declareRuntime<double>("detector.max_range", dp.max_range, D{"m, clusters beyond are ignored", 0.1, 100.0, false},
-        [this](double x) { detector_params_.max_range = x; });
-    dp.max_leg_width = declareRuntime<double>("detector.max_leg_width", dp.max_leg_width, D{"m, wider clusters are not legs", 0.01, 2.0, false},
-        [this](double x) { detector_params_.max_leg_width = x; });
-    dp.leg_center_offset = declareRuntime<double>("detector.leg_center_offset", dp.leg_center_offset, D{"m, leg centre behind the visible surface", 0.0, 0.5, false},
-        [this](double x) { detector_params_.leg_center_offset = x; });
-    dp.max_leg_pair_distance = declareRuntime<double>("detector.max_leg_pair_distance", dp.max_leg_pair_distance, D{"m, legs closer than this are paired", 0.0, 3.0, false},
-        [this](double x) { detector_params_.max_leg_pair_distance = x; });
-    dp.single_leg_min_confidence = declareRuntime<double>("detector.single_leg_min_confidence", dp.single_leg_min_confidence, D{"score an unpaired cluster needs to become a person", 0.0, 1.0, false},
-        [this](double x) { detector_params_.single_leg_min_confidence = x; });
-    dp.sigma_pair = declareRuntime<double>("detector.sigma_pair", dp.sigma_pair, D{"m, position std of a paired-leg person", 1e-4, 5.0, false},
-        [this](double x) { detector_params_.sigma_pair = x; });
-    dp.sigma_single = declareRuntime<double>("detector.sigma_single", dp.sigma_single, D{"m, position std of a single-cluster person", 1e-4, 5.0, false},
-        [this](double x) { detector_params_.sigma_single = x; });
+    declareRuntimeField("detector.min_leg_confidence", dp, detector_params_, &pt::DetectorParams::min_leg_confidence,
+                        D{"classifier score to accept a leg", 0.0, 1.0});
+    declareRuntimeField("detector.track_leg_confidence", dp, detector_params_, &pt::DetectorParams::track_leg_confidence,
+                        D{"weaker legs that may only update existing tracks", 0.0, 1.0});
+    declareRuntimeField("detector.max_range", dp, detector_params_, &pt::DetectorParams::max_range,
+                        D{"m, clusters beyond are ignored", 0.1, 100.0});
+    declareRuntimeField("detector.max_leg_width", dp, detector_params_, &pt::DetectorParams::max_leg_width,
+                        D{"m, wider clusters are not legs", 0.01, 2.0});
+    declareRuntimeField("detector.leg_center_offset", dp, detector_params_, &pt::DetectorParams::leg_center_offset,
+                        D{"m, leg centre behind the visible surface", 0.0, 0.5});
+    declareRuntimeField("detector.max_leg_pair_distance", dp, detector_params_, &pt::DetectorParams::max_leg_pair_distance,
+                        D{"m, legs closer than this are paired", 0.0, 3.0});
+    declareRuntimeField("detector.single_leg_min_confidence", dp, detector_params_, &pt::DetectorParams::single_leg_min_confidence,
+                        D{"score an unpaired cluster needs to become a person", 0.0, 1.0});
+    declareRuntimeField("detector.sigma_pair", dp, detector_params_, &pt::DetectorParams::sigma_pair,
+                        D{"m, position std of a paired-leg person", 1e-4, 5.0});
+    declareRuntimeField("detector.sigma_single", dp, detector_params_, &pt::DetectorParams::sigma_single,
+                        D{"m, position std of a single-cluster person", 1e-4, 5.0});
 
     // Tracker (tracker.hpp; Stüde §2.1.3).
     pt::TrackerParams tp;
@@ -184,34 +184,34 @@ class PeopleTracker : public cairn::Node {
 
     // Guide (guide.hpp; Yuan §2.2.1).
     pt::GuideParams gp;
-    gp.field_radius = declareRuntime<double>("guide.field_radius", gp.field_radius, D{"m, radius of the field in front of the robot (Yuan: 8 m)", 0.1, 100.0, false},
-        [this](double x) { guide_params_.field_radius = x; });
-    gp.field_half_angle = M_PI / 180.0 * declareRuntime<double>("guide.field_half_angle_deg", 90.0, D{"deg, half opening of the field (Yuan: semicircle)", 1.0, 180.0, false},
+    declareRuntimeField("guide.field_radius", gp, guide_params_, &pt::GuideParams::field_radius,
+                        D{"m, radius of the field in front of the robot (Yuan: 8 m)", 0.1, 100.0});
+    gp.field_half_angle = M_PI / 180.0 * declareRuntime<double>("guide.field_half_angle_deg", 90.0, D{"deg, half opening of the field (Yuan: semicircle)", 1.0, 180.0},
         [this](double deg) { guide_params_.field_half_angle = M_PI / 180.0 * deg; });
-    gp.select_max_distance = declareRuntime<double>("guide.select_max_distance", gp.select_max_distance, D{"m, follow(closest) considers people this close", 0.1, 100.0, false},
-        [this](double x) { guide_params_.select_max_distance = x; });
-    gp.lost_timeout = declareRuntime<double>("guide.lost_timeout", gp.lost_timeout, D{"s unmatched until Person Lost", 0.0, 60.0, false},
-        [this](double x) { guide_params_.lost_timeout = x; });
-    gp.auto_reacquire = declareRuntime<bool>("guide.auto_reacquire", gp.auto_reacquire, D{"re-acquire a track appearing near the lost guide", {}, {}, false},
-        [this](bool x) { guide_params_.auto_reacquire = x; });
-    gp.reacquire_radius = declareRuntime<double>("guide.reacquire_radius", gp.reacquire_radius, D{"m around the last guide position", 0.0, 20.0, false},
-        [this](double x) { guide_params_.reacquire_radius = x; });
-    gp.reacquire_window = declareRuntime<double>("guide.reacquire_window", gp.reacquire_window, D{"s before Person Lost falls back to Search", 0.0, 3600.0, false},
-        [this](double x) { guide_params_.reacquire_window = x; });
+    declareRuntimeField("guide.select_max_distance", gp, guide_params_, &pt::GuideParams::select_max_distance,
+                        D{"m, follow(closest) considers people this close", 0.1, 100.0});
+    declareRuntimeField("guide.lost_timeout", gp, guide_params_, &pt::GuideParams::lost_timeout,
+                        D{"s unmatched until Person Lost", 0.0, 60.0});
+    declareRuntimeField("guide.auto_reacquire", gp, guide_params_, &pt::GuideParams::auto_reacquire,
+                        D{"re-acquire a track appearing near the lost guide", {}, {}});
+    declareRuntimeField("guide.reacquire_radius", gp, guide_params_, &pt::GuideParams::reacquire_radius,
+                        D{"m around the last guide position", 0.0, 20.0});
+    declareRuntimeField("guide.reacquire_window", gp, guide_params_, &pt::GuideParams::reacquire_window,
+                        D{"s before Person Lost falls back to Search", 0.0, 3600.0});
 
     // Masking (masking.hpp; Yuan §3.2.1).
-    mask_mode_ = declareRuntime<std::string>("mask.people", "all", D{"whom scan_filtered hides: all (published tracks) | guide (Yuan §3.2.1) | none", {}, {}, false},
+    mask_mode_ = declareRuntime<std::string>("mask.people", "all", D{"whom scan_filtered hides: all (published tracks) | guide (Yuan §3.2.1) | none", {}, {}},
         [this](const std::string& x) { mask_mode_ = x; });
     if (auto bad = checkChoice("mask.people", mask_mode_)) throw std::invalid_argument(*bad);
-    mask_.leg_radius = declareRuntime<double>("mask.leg_radius", mask_.leg_radius, D{"m, added to half the leg separation", 0.0, 1.0, false},
-        [this](double x) { mask_.leg_radius = x; });
-    mask_.margin = declareRuntime<double>("mask.margin", mask_.margin, D{"m, safety margin of r_P", 0.0, 2.0, false},
-        [this](double x) { mask_.margin = x; });
-    mask_.default_radius = declareRuntime<double>("mask.default_radius", mask_.default_radius, D{"m, r_P when the leg separation is unknown", 0.05, 3.0, false},
-        [this](double x) { mask_.default_radius = x; });
-    mask_.min_radius = declareRuntime<double>("mask.min_radius", mask_.min_radius, D{"m, smallest r_P", 0.0, 3.0, false},
-        [this](double x) { mask_.min_radius = x; });
-    const std::string mask_kind = declareRuntime<std::string>("mask.mode", "inside", D{"inside: only returns inside the circle | tangents: every beam between the tangents (Yuan §3.2.1)", {}, {}, false},
+    declareRuntimeField("mask.leg_radius", mask_, mask_, &pt::MaskParams::leg_radius,
+                        D{"m, added to half the leg separation", 0.0, 1.0});
+    declareRuntimeField("mask.margin", mask_, mask_, &pt::MaskParams::margin,
+                        D{"m, safety margin of r_P", 0.0, 2.0});
+    declareRuntimeField("mask.default_radius", mask_, mask_, &pt::MaskParams::default_radius,
+                        D{"m, r_P when the leg separation is unknown", 0.05, 3.0});
+    declareRuntimeField("mask.min_radius", mask_, mask_, &pt::MaskParams::min_radius,
+                        D{"m, smallest r_P", 0.0, 3.0});
+    const std::string mask_kind = declareRuntime<std::string>("mask.mode", "inside", D{"inside: only returns inside the circle | tangents: every beam between the tangents (Yuan §3.2.1)", {}, {}},
         [this](const std::string& x) { mask_kind_ = pt::parseMaskMode(x, "parameter 'mask.mode'"); });
     if (auto bad = checkChoice("mask.mode", mask_kind)) throw std::invalid_argument(*bad);
     mask_kind_ = pt::parseMaskMode(mask_kind, "parameter 'mask.mode'");
@@ -266,10 +266,18 @@ class PeopleTracker : public cairn::Node {
   // Declares a parameter that may change at run time; `apply` sets it on the staged detector/guide parameters or
   // the mask settings when applyPendingParameters() runs.
   template <class T, class F>
-  T declareRuntime(const std::string& name, const T& def, const cairn::ParameterDescriptor& desc, F apply) {
+  T declareRuntime(const std::string& name, const T& def, cairn::ParameterDescriptor desc, F apply) {
+    desc.read_only = false;
     const T value = declare_parameter<T>(name, def, desc);
     runtime_setters_[name] = [name, apply](const cairn::ParameterValue& v) { apply(cairn::parameter_as<T>(v, name)); };
     return value;
+  }
+  // The common case: a field of a parameter struct. Declared with `initial.*field` as default (the value goes back
+  // there); a run-time change sets `staged.*field`.
+  template <class S, class T>
+  void declareRuntimeField(const std::string& name, S& initial, S& staged, T S::*field,
+                           const cairn::ParameterDescriptor& desc) {
+    initial.*field = declareRuntime<T>(name, initial.*field, desc, [&staged, field](const T& x) { staged.*field = x; });
   }
 
   // The string parameters' choices; the reason when `value` is not one of them.

@@ -219,7 +219,7 @@ TrackerStatus PeopleTracker::updateLegs(double stamp, const std::vector<LegDetec
     if (!l.position.allFinite()) continue;
     const Eigen::Vector2d p = sensor_pose.transform(l.position);
     // Legs on the static map are parts of it (wall ends, furniture seen edge-on): neither start nor feed tracks.
-    if (static_map_ && static_map_->occupiedWithin(p, params_.static_map_margin)) continue;
+    if (onStaticMap(p)) continue;
     in_frame.push_back({p, l.confidence, l.width});
   }
   std::vector<int> det_track;
@@ -229,8 +229,7 @@ TrackerStatus PeopleTracker::updateLegs(double stamp, const std::vector<LegDetec
     // the track its legs were given to, the others' remaining detections go through association and initiation.
     std::vector<PersonDetection> rest;
     for (const PersonDetection& d : others)
-      if (d.position.allFinite() && d.covariance.allFinite() &&
-          !(static_map_ && static_map_->occupiedWithin(d.position, params_.static_map_margin)))
+      if (d.position.allFinite() && d.covariance.allFinite() && !onStaticMap(d.position))
         rest.push_back(d);
     std::vector<bool> fused(rest.size(), false);
     for (const auto& [i, j] : nearestPairs(dets, rest, params_.fusion)) {
@@ -493,6 +492,10 @@ void PeopleTracker::reidentify(std::size_t new_track) {
   n.first_stamp = deleted_[best_k].track.first_stamp;
   if (n.leg_separation <= 0.0) n.leg_separation = deleted_[best_k].track.leg_separation;
   deleted_.erase(deleted_.begin() + static_cast<long>(best_k));
+}
+
+bool PeopleTracker::onStaticMap(const Eigen::Vector2d& p) const {
+  return static_map_ && static_map_->occupiedWithin(p, params_.static_map_margin);
 }
 
 void PeopleTracker::applyUpdate(Track& t, const PersonDetection& d) {

@@ -176,6 +176,8 @@ class PeopleTracker {
   void prune();
   Eigen::Matrix2d legSpread(const Track& t) const;
   void reidentify(std::size_t new_track);
+  // Within static_map_margin of an occupied cell of the static map (false without a map).
+  [[nodiscard]] bool onStaticMap(const Eigen::Vector2d& p) const;
   void classifyVisibility(const LaserScan& scan, const Pose2& sensor_pose);
 
   struct Deleted {
