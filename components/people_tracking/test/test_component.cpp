@@ -65,6 +65,12 @@ struct Heard {
   std::map<int64_t, sensor_msgs::msg::LaserScan> masked;
 };
 int64_t key(const builtin_interfaces::msg::Time& t) { return int64_t{t.sec} * 1000000000 + t.nanosec; }
+// The message heard for the scan stamped `t` (seconds), or nullptr if none was.
+template <class M>
+const M* heardAt(const std::map<int64_t, M>& heard, double t) {
+  const auto it = heard.find(key(stampOf(t)));
+  return it == heard.end() ? nullptr : &it->second;
+}
 
 constexpr auto waitFor = &cairn::testing::wait_for;  // cairn/test_support.hpp
 
@@ -216,7 +222,7 @@ struct FallbackMountRig {
       scan_pub->publish(toMsg(s));
       waitFor([&] {
         std::lock_guard l(heard.mu);
-        return heard.tracks.count(key(stampOf(t))) > 0;
+        return heardAt(heard.tracks, t) != nullptr;
       }, k * dt < tf_timeout + 0.1 ? 200ms : 5s);
     }
   }
@@ -279,7 +285,7 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
 
   auto received = [&](double t) {
     std::lock_guard l(heard.mu);
-    return heard.tracks.count(key(stampOf(t))) > 0;
+    return heardAt(heard.tracks, t) != nullptr;
   };
 
   const double dt = 1.0 / 15.0;
@@ -322,12 +328,12 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
   int matched_a = 0, matched_b = 0, considered = 0;
   for (int k = 15; k < steps; ++k) {
     const double t = 100.0 + k * dt;
-    const auto it = heard.tracks.find(key(stampOf(t)));
-    if (it == heard.tracks.end()) continue;
+    const auto* msg = heardAt(heard.tracks, t);
+    if (!msg) continue;
     ++considered;
-    EXPECT_EQ(it->second.header.frame_id, "odom");
-    const auto a = trackNear(it->second, world.personA(k * dt), 0.35);
-    const auto b = trackNear(it->second, world.personB(k * dt), 0.35);
+    EXPECT_EQ(msg->header.frame_id, "odom");
+    const auto a = trackNear(*msg, world.personA(k * dt), 0.35);
+    const auto b = trackNear(*msg, world.personB(k * dt), 0.35);
     if (a) {
       ++matched_a;
       if (!id_a) id_a = a;
@@ -338,7 +344,7 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
       if (!id_b) id_b = b;
       EXPECT_EQ(*b, *id_b) << "person B changed id at scan " << k;
     }
-    for (const auto& tr : it->second.tracks) {
+    for (const auto& tr : msg->tracks) {
       EXPECT_LT(std::hypot(tr.velocity.x, tr.velocity.y), 2.0) << "implausible speed of track " << tr.track_id;
     }
   }
@@ -353,10 +359,10 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
   EXPECT_EQ(*guide_reply, *id_a);
   int tracking = 0;
   for (int k = select_at + 2; k < steps; ++k) {
-    const auto it = heard.guide.find(key(stampOf(100.0 + k * dt)));
-    if (it == heard.guide.end()) continue;
-    EXPECT_EQ(it->second.track_id, static_cast<int32_t>(*id_a));
-    tracking += it->second.state == pmsg::GuideState_Constants::TRACKING;
+    const auto* msg = heardAt(heard.guide, 100.0 + k * dt);
+    if (!msg) continue;
+    EXPECT_EQ(msg->track_id, static_cast<int32_t>(*id_a));
+    tracking += msg->state == pmsg::GuideState_Constants::TRACKING;
   }
   EXPECT_GE(tracking, 10);
 
@@ -364,20 +370,20 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
   int checked = 0;
   for (int k = select_at + 5; k < steps; ++k) {
     const double t = 100.0 + k * dt;
-    const auto it = heard.masked.find(key(stampOf(t)));
-    if (it == heard.masked.end()) continue;
+    const auto* msg = heardAt(heard.masked, t);
+    if (!msg) continue;
     const auto& raw = sent[k];
-    ASSERT_EQ(it->second.ranges.size(), raw.ranges.size());
+    ASSERT_EQ(msg->ranges.size(), raw.ranges.size());
     const auto robot = world.laserPose(k * dt);
     auto beamTo = [&](const Eigen::Vector2d& p) {
       const Eigen::Vector2d local = robot.inverseTransform(p);
       return static_cast<std::size_t>(std::lround((std::atan2(local.y(), local.x()) - raw.angle_min) / raw.angle_increment));
     };
     const std::size_t ba = beamTo(world.personA(k * dt)), bb = beamTo(world.personB(k * dt));
-    EXPECT_TRUE(std::isnan(it->second.ranges[ba])) << "guide not masked at scan " << k;
-    EXPECT_EQ(it->second.ranges[bb], raw.ranges[bb]) << "a non-guide was masked at scan " << k;
+    EXPECT_TRUE(std::isnan(msg->ranges[ba])) << "guide not masked at scan " << k;
+    EXPECT_EQ(msg->ranges[bb], raw.ranges[bb]) << "a non-guide was masked at scan " << k;
     std::size_t masked = 0;
-    for (std::size_t i = 0; i < raw.ranges.size(); ++i) masked += std::isnan(it->second.ranges[i]) && !std::isnan(raw.ranges[i]);
+    for (std::size_t i = 0; i < raw.ranges.size(); ++i) masked += std::isnan(msg->ranges[i]) && !std::isnan(raw.ranges[i]);
     EXPECT_GT(masked, 5u);
     EXPECT_LT(masked, 120u) << "more than the guide's circle masked";
     ++checked;
@@ -399,14 +405,14 @@ TEST(PeopleTrackerComponent, LaserMountFallsBackToParametersWhenNoTfArrives) {
   std::lock_guard l(heard.mu);
   int matched = 0, processed = 0;
   for (int k = 0; k < steps; ++k) {
-    const auto it = heard.tracks.find(key(stampOf(200.0 + k * dt)));
+    const auto* msg = heardAt(heard.tracks, 200.0 + k * dt);
     if (k * dt < 0.5 - 1e-9) {
-      EXPECT_EQ(it, heard.tracks.end()) << "scan " << k << " processed while waiting for TF";
+      EXPECT_EQ(msg, nullptr) << "scan " << k << " processed while waiting for TF";
       continue;
     }
-    ASSERT_NE(it, heard.tracks.end()) << "scan " << k << " not processed after the TF timeout";
+    ASSERT_NE(msg, nullptr) << "scan " << k << " not processed after the TF timeout";
     ++processed;
-    if (k >= 15 && trackNear(it->second, world.personA(k * dt), 0.35)) ++matched;
+    if (k >= 15 && trackNear(*msg, world.personA(k * dt), 0.35)) ++matched;
   }
   EXPECT_GE(processed, 20);
   EXPECT_GE(matched, 13) << "person A not tracked at its odometry-frame position with the fallback mount";
@@ -440,7 +446,7 @@ TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning
   ASSERT_TRUE(waitFor([&] { return scan_pub->inter_process_subscription_count() > 0; }, 20s));
   auto received = [&](double t) {
     std::lock_guard l(heard.mu);
-    return heard.tracks.count(key(stampOf(t))) > 0;
+    return heardAt(heard.tracks, t) != nullptr;
   };
 
   World world;
@@ -494,8 +500,10 @@ TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning
   // One reliable writer keeps its order: a bad scan that produced output would have arrived before `holes`.
   for (std::size_t i = 0; i < bad.size(); ++i)
     EXPECT_EQ(heard.tracks.count(key(bad[i].second.header.stamp)), 0u) << bad[i].first << " was not rejected";
-  EXPECT_EQ(heard.tracks.at(key(stampOf(back))).header.frame_id, "laser");
-  EXPECT_TRUE(heard.tracks.at(key(stampOf(back))).tracks.empty()) << "a reset tracker has no confirmed tracks";
+  const auto* after_reset = heardAt(heard.tracks, back);
+  ASSERT_NE(after_reset, nullptr) << "the scan after the time jump was not processed";
+  EXPECT_EQ(after_reset->header.frame_id, "laser");
+  EXPECT_TRUE(after_reset->tracks.empty()) << "a reset tracker has no confirmed tracks";
 
 }
 
@@ -543,11 +551,11 @@ TEST(PeopleTrackerComponent, StaticMapDropsLegsOnMappedCells) {
     Heard& heard = rig.heard;
     std::lock_guard l(heard.mu);
     for (int k = 15; k < steps; ++k) {
-      const auto it = heard.tracks.find(key(stampOf(300.0 + k * dt)));
-      if (it == heard.tracks.end()) continue;
-      for (const auto& tr : it->second.tracks)
+      const auto* msg = heardAt(heard.tracks, 300.0 + k * dt);
+      if (!msg) continue;
+      for (const auto& tr : msg->tracks)
         if ((Eigen::Vector2d(tr.position.x, tr.position.y) - 0.5 * (posts[0] + posts[1])).norm() < 0.35) ++on_posts;
-      if (trackNear(it->second, world.personA(k * dt), 0.35)) ++on_a;
+      if (trackNear(*msg, world.personA(k * dt), 0.35)) ++on_a;
     }
   };
   int posts_without = 0, a_without = 0, posts_with = 0, a_with = 0;
@@ -597,10 +605,10 @@ TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
     Heard& heard = rig.heard;
     std::lock_guard l(heard.mu);
     for (int k = 15; k < steps; ++k) {
-      const auto it = heard.tracks.find(key(stampOf(400.0 + k * dt)));
-      if (it == heard.tracks.end()) continue;
-      if (trackNear(it->second, hidden, 0.3)) ++on_hidden;
-      if (trackNear(it->second, world.personA(k * dt), 0.35)) ++on_a;
+      const auto* msg = heardAt(heard.tracks, 400.0 + k * dt);
+      if (!msg) continue;
+      if (trackNear(*msg, hidden, 0.3)) ++on_hidden;
+      if (trackNear(*msg, world.personA(k * dt), 0.35)) ++on_a;
     }
   };
   int hidden_without = 0, a_without = 0, hidden_with = 0, a_with = 0;
@@ -651,9 +659,9 @@ TEST(PeopleTrackerComponent, DetectorParametersChangeAtRunTime) {
   std::lock_guard l(heard.mu);
   int before = 0, after = 0, processed_after = 0;
   for (int k = 15; k < steps; ++k) {
-    const auto it = heard.tracks.find(key(stampOf(500.0 + k * dt)));
-    if (it == heard.tracks.end()) continue;
-    const bool on_a = trackNear(it->second, world.personA(k * dt), 0.35).has_value();
+    const auto* msg = heardAt(heard.tracks, 500.0 + k * dt);
+    if (!msg) continue;
+    const bool on_a = trackNear(*msg, world.personA(k * dt), 0.35).has_value();
     if (k < change) before += on_a;
     if (k >= change + 10) {
       after += on_a;
