@@ -16,6 +16,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "cairn/component.hpp"
@@ -25,6 +26,7 @@
 #include "cairn/people_tracking/detector.hpp"
 #include "cairn/people_tracking/guide.hpp"
 #include "cairn/people_tracking/masking.hpp"
+#include "cairn/people_tracking/param_ranges.hpp"
 #include "cairn/people_tracking/static_map.hpp"
 #include "cairn/people_tracking/tracker.hpp"
 #include "cairn/tf.hpp"
@@ -109,30 +111,30 @@ class PeopleTracker : public cairn::Node {
     // Detector (segmentation.hpp, detector.hpp).
     pt::DetectorParams dp;
     auto& sp = dp.segmentation;
-    sp.jump_base = declare_parameter<double>("segmentation.jump_base", sp.jump_base, D{"m, fixed part of the jump threshold", 0.0, 2.0, true});
-    sp.jump_beam_factor = declare_parameter<double>("segmentation.jump_beam_factor", sp.jump_beam_factor, D{"multiples of the beam spacing r*dtheta", 0.0, 50.0, true});
-    sp.max_gap_beams = static_cast<int>(declare_parameter<int64_t>("segmentation.max_gap_beams", sp.max_gap_beams, D{"invalid beams tolerated inside a cluster", 0.0, 20.0, true}));
-    sp.min_points = static_cast<std::size_t>(declare_parameter<int64_t>("segmentation.min_points", static_cast<int64_t>(sp.min_points), D{"smallest cluster", 1.0, 1000.0, true}));
-    sp.max_points = static_cast<std::size_t>(declare_parameter<int64_t>("segmentation.max_points", static_cast<int64_t>(sp.max_points), D{"largest cluster", 1.0, 100000.0, true}));
-    sp.jump_cap = declare_parameter<double>("segmentation.jump_cap", sp.jump_cap, D{"m, neighbour jump when there is no neighbour", 0.0, 100.0, true});
+    sp.jump_base = declareRanged<double>("segmentation.jump_base", sp.jump_base, "m, fixed part of the jump threshold");
+    sp.jump_beam_factor = declareRanged<double>("segmentation.jump_beam_factor", sp.jump_beam_factor, "multiples of the beam spacing r*dtheta");
+    sp.max_gap_beams = static_cast<int>(declareRanged<int64_t>("segmentation.max_gap_beams", sp.max_gap_beams, "invalid beams tolerated inside a cluster"));
+    sp.min_points = static_cast<std::size_t>(declareRanged<int64_t>("segmentation.min_points", static_cast<int64_t>(sp.min_points), "smallest cluster"));
+    sp.max_points = static_cast<std::size_t>(declareRanged<int64_t>("segmentation.max_points", static_cast<int64_t>(sp.max_points), "largest cluster"));
+    sp.jump_cap = declareRanged<double>("segmentation.jump_cap", sp.jump_cap, "m, neighbour jump when there is no neighbour");
     declareRuntimeField("detector.min_leg_confidence", dp, detector_params_, &pt::DetectorParams::min_leg_confidence,
-                        D{"classifier score to accept a leg", 0.0, 1.0});
+                        "classifier score to accept a leg");
     declareRuntimeField("detector.track_leg_confidence", dp, detector_params_, &pt::DetectorParams::track_leg_confidence,
-                        D{"weaker legs that may only update existing tracks", 0.0, 1.0});
+                        "weaker legs that may only update existing tracks");
     declareRuntimeField("detector.max_range", dp, detector_params_, &pt::DetectorParams::max_range,
-                        D{"m, clusters beyond are ignored", 0.1, 100.0});
+                        "m, clusters beyond are ignored");
     declareRuntimeField("detector.max_leg_width", dp, detector_params_, &pt::DetectorParams::max_leg_width,
-                        D{"m, wider clusters are not legs", 0.01, 2.0});
+                        "m, wider clusters are not legs");
     declareRuntimeField("detector.leg_center_offset", dp, detector_params_, &pt::DetectorParams::leg_center_offset,
-                        D{"m, leg centre behind the visible surface", 0.0, 0.5});
+                        "m, leg centre behind the visible surface");
     declareRuntimeField("detector.max_leg_pair_distance", dp, detector_params_, &pt::DetectorParams::max_leg_pair_distance,
-                        D{"m, legs closer than this are paired", 0.0, 3.0});
+                        "m, legs closer than this are paired");
     declareRuntimeField("detector.single_leg_min_confidence", dp, detector_params_, &pt::DetectorParams::single_leg_min_confidence,
-                        D{"score an unpaired cluster needs to become a person", 0.0, 1.0});
+                        "score an unpaired cluster needs to become a person");
     declareRuntimeField("detector.sigma_pair", dp, detector_params_, &pt::DetectorParams::sigma_pair,
-                        D{"m, position std of a paired-leg person", 1e-4, 5.0});
+                        "m, position std of a paired-leg person");
     declareRuntimeField("detector.sigma_single", dp, detector_params_, &pt::DetectorParams::sigma_single,
-                        D{"m, position std of a single-cluster person", 1e-4, 5.0});
+                        "m, position std of a single-cluster person");
 
     // Tracker (tracker.hpp; Stüde §2.1.3).
     pt::TrackerParams tp;
@@ -142,75 +144,75 @@ class PeopleTracker : public cairn::Node {
     } catch (const pt::InputError&) {
       throw std::invalid_argument("parameter 'tracker.association' must be gnn or jpda, got '" + assoc + "'");
     }
-    tp.process_noise = declare_parameter<double>("tracker.process_noise", tp.process_noise, D{"m^2/s^3, CV white-noise acceleration density", 1e-6, 100.0, true});
-    tp.maneuver_process_noise = declare_parameter<double>("tracker.maneuver_process_noise", tp.maneuver_process_noise, D{"m^2/s^3, IMM manoeuvre mode (0 = one walking mode)", 0.0, 1000.0, true});
-    tp.maneuver_rate = declare_parameter<double>("tracker.maneuver_rate", tp.maneuver_rate, D{"1/s, IMM walking -> manoeuvre switching rate", 0.0, 100.0, true});
-    tp.maneuver_end_rate = declare_parameter<double>("tracker.maneuver_end_rate", tp.maneuver_end_rate, D{"1/s, IMM manoeuvre -> walking switching rate", 0.0, 100.0, true});
-    tp.initial_velocity_sigma = declare_parameter<double>("tracker.initial_velocity_sigma", tp.initial_velocity_sigma, D{"m/s, velocity std of a new track", 1e-3, 10.0, true});
-    tp.gate_chi2 = declare_parameter<double>("tracker.gate_chi2", tp.gate_chi2, D{"chi-square gate (2 dof)", 0.1, 100.0, true});
-    tp.confirm_hits = static_cast<int>(declare_parameter<int64_t>("tracker.confirm_hits", tp.confirm_hits, D{"associated scans until confirmed", 1.0, 100.0, true}));
-    tp.tentative_timeout = declare_parameter<double>("tracker.tentative_timeout", tp.tentative_timeout, D{"s without update deletes a tentative track", 0.0, 60.0, true});
-    tp.delete_timeout = declare_parameter<double>("tracker.delete_timeout", tp.delete_timeout, D{"s without update deletes a confirmed track", 0.0, 60.0, true});
-    tp.max_position_sigma = declare_parameter<double>("tracker.max_position_sigma", tp.max_position_sigma, D{"m, deletion when the position std grows beyond", 0.01, 100.0, true});
-    tp.min_init_distance = declare_parameter<double>("tracker.min_init_distance", tp.min_init_distance, D{"m, no new track this close to a confirmed one", 0.0, 5.0, true});
-    tp.publish_coast_time = declare_parameter<double>("tracker.publish_coast_time", tp.publish_coast_time, D{"s, coasting confirmed tracks are published this long", 0.0, 60.0, true});
-    tp.max_dt = declare_parameter<double>("tracker.max_dt", tp.max_dt, D{"s, larger forward time jumps reset the tracker", 0.01, 3600.0, true});
-    tp.detection_probability = declare_parameter<double>("tracker.detection_probability", tp.detection_probability, D{"JPDA P_D", 0.01, 1.0, true});
-    tp.clutter_density = declare_parameter<double>("tracker.clutter_density", tp.clutter_density, D{"JPDA false detections per m^2", 1e-9, 100.0, true});
-    tp.jpda_max_events = static_cast<int>(declare_parameter<int64_t>("tracker.jpda_max_events", tp.jpda_max_events, D{"larger JPDA gating clusters fall back to GNN", 1.0, 1e7, true}));
-    tp.min_detection_confidence = declare_parameter<double>("tracker.min_detection_confidence", tp.min_detection_confidence, D{"detections below are not used", 0.0, 1.0, true});
-    tp.confidence_gain = declare_parameter<double>("tracker.confidence_gain", tp.confidence_gain, D{"track confidence moving-average gain", 0.0, 1.0, true});
-    tp.leg_spread_sigma = declare_parameter<double>("tracker.leg_spread_sigma", tp.leg_spread_sigma, D{"m, std of a leg around the body centre (along the walking direction)", 0.01, 2.0, true});
-    tp.leg_spread_lateral_sigma = declare_parameter<double>("tracker.leg_spread_lateral_sigma", tp.leg_spread_lateral_sigma, D{"m, leg spread across the walking direction", 0.01, 2.0, true});
-    tp.leg_spread_min_speed = declare_parameter<double>("tracker.leg_spread_min_speed", tp.leg_spread_min_speed, D{"m/s, slower tracks use an isotropic leg spread", 0.0, 10.0, true});
-    tp.leg_gate_chi2 = declare_parameter<double>("tracker.leg_gate_chi2", tp.leg_gate_chi2, D{"chi-square gate (2 dof) of a leg around a track", 0.1, 100.0, true});
-    tp.reid_window = declare_parameter<double>("tracker.reid_window", tp.reid_window, D{"s, deleted tracks can give their id to a new track this long (0: off)", 0.0, 60.0, true});
-    tp.reid_gate_chi2 = declare_parameter<double>("tracker.reid_gate_chi2", tp.reid_gate_chi2, D{"chi-square gate (2 dof) of re-identification", 0.1, 100.0, true});
-    tp.visibility_radius = declare_parameter<double>("tracker.visibility_radius", tp.visibility_radius, D{"m, beams this close to a track decide occluded / free space / missed", 0.05, 2.0, true});
-    tp.occluded_coast_time = declare_parameter<double>("tracker.occluded_coast_time", tp.occluded_coast_time, D{"s, occluded confirmed tracks are published this long", 0.0, 60.0, true});
-    tp.occluded_delete_timeout = declare_parameter<double>("tracker.occluded_delete_timeout", tp.occluded_delete_timeout, D{"s without update deletes a track occluded since its last update", 0.0, 60.0, true});
-    tp.free_space_delete_scans = static_cast<int>(declare_parameter<int64_t>("tracker.free_space_delete_scans", tp.free_space_delete_scans, D{"consecutive scans with beams through a track delete it", 1.0, 1000.0, true}));
-    tp.split_scans = static_cast<int>(declare_parameter<int64_t>("tracker.split_scans", tp.split_scans, D{"scans with four legs in a track's gate before it splits (0 = never)", 0.0, 1000.0, true}));
-    tp.single_leg_stride_sigma = declare_parameter<double>("tracker.single_leg_stride_sigma", tp.single_leg_stride_sigma, D{"m, single-leg update std along the walking direction (0 = off)", 0.0, 2.0, true});
+    tp.process_noise = declareRanged<double>("tracker.process_noise", tp.process_noise, "m^2/s^3, CV white-noise acceleration density");
+    tp.maneuver_process_noise = declareRanged<double>("tracker.maneuver_process_noise", tp.maneuver_process_noise, "m^2/s^3, IMM manoeuvre mode (0 = one walking mode)");
+    tp.maneuver_rate = declareRanged<double>("tracker.maneuver_rate", tp.maneuver_rate, "1/s, IMM walking -> manoeuvre switching rate");
+    tp.maneuver_end_rate = declareRanged<double>("tracker.maneuver_end_rate", tp.maneuver_end_rate, "1/s, IMM manoeuvre -> walking switching rate");
+    tp.initial_velocity_sigma = declareRanged<double>("tracker.initial_velocity_sigma", tp.initial_velocity_sigma, "m/s, velocity std of a new track");
+    tp.gate_chi2 = declareRanged<double>("tracker.gate_chi2", tp.gate_chi2, "chi-square gate (2 dof)");
+    tp.confirm_hits = static_cast<int>(declareRanged<int64_t>("tracker.confirm_hits", tp.confirm_hits, "associated scans until confirmed"));
+    tp.tentative_timeout = declareRanged<double>("tracker.tentative_timeout", tp.tentative_timeout, "s without update deletes a tentative track");
+    tp.delete_timeout = declareRanged<double>("tracker.delete_timeout", tp.delete_timeout, "s without update deletes a confirmed track");
+    tp.max_position_sigma = declareRanged<double>("tracker.max_position_sigma", tp.max_position_sigma, "m, deletion when the position std grows beyond");
+    tp.min_init_distance = declareRanged<double>("tracker.min_init_distance", tp.min_init_distance, "m, no new track this close to a confirmed one");
+    tp.publish_coast_time = declareRanged<double>("tracker.publish_coast_time", tp.publish_coast_time, "s, coasting confirmed tracks are published this long");
+    tp.max_dt = declareRanged<double>("tracker.max_dt", tp.max_dt, "s, larger forward time jumps reset the tracker");
+    tp.detection_probability = declareRanged<double>("tracker.detection_probability", tp.detection_probability, "JPDA P_D");
+    tp.clutter_density = declareRanged<double>("tracker.clutter_density", tp.clutter_density, "JPDA false detections per m^2");
+    tp.jpda_max_events = static_cast<int>(declareRanged<int64_t>("tracker.jpda_max_events", tp.jpda_max_events, "larger JPDA gating clusters fall back to GNN"));
+    tp.min_detection_confidence = declareRanged<double>("tracker.min_detection_confidence", tp.min_detection_confidence, "detections below are not used");
+    tp.confidence_gain = declareRanged<double>("tracker.confidence_gain", tp.confidence_gain, "track confidence moving-average gain");
+    tp.leg_spread_sigma = declareRanged<double>("tracker.leg_spread_sigma", tp.leg_spread_sigma, "m, std of a leg around the body centre (along the walking direction)");
+    tp.leg_spread_lateral_sigma = declareRanged<double>("tracker.leg_spread_lateral_sigma", tp.leg_spread_lateral_sigma, "m, leg spread across the walking direction");
+    tp.leg_spread_min_speed = declareRanged<double>("tracker.leg_spread_min_speed", tp.leg_spread_min_speed, "m/s, slower tracks use an isotropic leg spread");
+    tp.leg_gate_chi2 = declareRanged<double>("tracker.leg_gate_chi2", tp.leg_gate_chi2, "chi-square gate (2 dof) of a leg around a track");
+    tp.reid_window = declareRanged<double>("tracker.reid_window", tp.reid_window, "s, deleted tracks can give their id to a new track this long (0: off)");
+    tp.reid_gate_chi2 = declareRanged<double>("tracker.reid_gate_chi2", tp.reid_gate_chi2, "chi-square gate (2 dof) of re-identification");
+    tp.visibility_radius = declareRanged<double>("tracker.visibility_radius", tp.visibility_radius, "m, beams this close to a track decide occluded / free space / missed");
+    tp.occluded_coast_time = declareRanged<double>("tracker.occluded_coast_time", tp.occluded_coast_time, "s, occluded confirmed tracks are published this long");
+    tp.occluded_delete_timeout = declareRanged<double>("tracker.occluded_delete_timeout", tp.occluded_delete_timeout, "s without update deletes a track occluded since its last update");
+    tp.free_space_delete_scans = static_cast<int>(declareRanged<int64_t>("tracker.free_space_delete_scans", tp.free_space_delete_scans, "consecutive scans with beams through a track delete it"));
+    tp.split_scans = static_cast<int>(declareRanged<int64_t>("tracker.split_scans", tp.split_scans, "scans with four legs in a track's gate before it splits (0 = never)"));
+    tp.single_leg_stride_sigma = declareRanged<double>("tracker.single_leg_stride_sigma", tp.single_leg_stride_sigma, "m, single-leg update std along the walking direction (0 = off)");
     // Static map (static_map.hpp): legs on its occupied cells are dropped (wall ends, furniture seen edge-on).
     static_map_topic_ = declare_parameter<std::string>("static_map.topic", "", D{"OccupancyGrid (latched) whose occupied cells are not people, e.g. the SLAM map; empty = off", {}, {}, true});
-    tp.static_map_margin = declare_parameter<double>("static_map.margin", tp.static_map_margin, D{"m, legs this close to an occupied cell are dropped", 0.0, 2.0, true});
+    tp.static_map_margin = declareRanged<double>("static_map.margin", tp.static_map_margin, "m, legs this close to an occupied cell are dropped");
     static_map_threshold_ = static_cast<int>(declare_parameter<int64_t>("static_map.occupied_threshold", 65, D{"cell value (0-100) from which a cell is occupied", 1.0, 100.0, true}));
     // Other detection sources (Stüde §2.1.3; PeopleTracker::updateLegs `others`).
     fusion_topic_ = declare_parameter<std::string>("fusion.topic", "", D{"PersonDetections of another source (a camera detector, a second laser) fused with the legs; empty = off", {}, {}, true});
     fusion_max_age_ = declare_parameter<double>("fusion.max_age", fusion_max_age_, D{"s, a message is used by the first scan within this time of its stamp, once", 0.0, 5.0, true});
-    tp.fusion.max_pair_distance = declare_parameter<double>("fusion.max_pair_distance", tp.fusion.max_pair_distance, D{"m, farther detections are not fused with a person from legs", 0.0, 10.0, true});
-    tp.fusion.gate_chi2 = declare_parameter<double>("fusion.gate_chi2", tp.fusion.gate_chi2, D{"Mahalanobis gate of a pair (0: Euclidean nearest pairs, as in the thesis)", 0.0, 100.0, true});
+    tp.fusion.max_pair_distance = declareRanged<double>("fusion.max_pair_distance", tp.fusion.max_pair_distance, "m, farther detections are not fused with a person from legs");
+    tp.fusion.gate_chi2 = declareRanged<double>("fusion.gate_chi2", tp.fusion.gate_chi2, "Mahalanobis gate of a pair (0: Euclidean nearest pairs, as in the thesis)");
 
     // Guide (guide.hpp; Yuan §2.2.1).
     pt::GuideParams gp;
     declareRuntimeField("guide.field_radius", gp, guide_params_, &pt::GuideParams::field_radius,
-                        D{"m, radius of the field in front of the robot (Yuan: 8 m)", 0.1, 100.0});
-    gp.field_half_angle = M_PI / 180.0 * declareRuntime<double>("guide.field_half_angle_deg", 90.0, D{"deg, half opening of the field (Yuan: semicircle)", 1.0, 180.0},
+                        "m, radius of the field in front of the robot (Yuan: 8 m)");
+    gp.field_half_angle = M_PI / 180.0 * declareRuntime<double>("guide.field_half_angle_deg", 90.0, rangedDescriptor("guide.field_half_angle_deg", "deg, half opening of the field (Yuan: semicircle)"),
         [this](double deg) { guide_params_.field_half_angle = M_PI / 180.0 * deg; });
     declareRuntimeField("guide.select_max_distance", gp, guide_params_, &pt::GuideParams::select_max_distance,
-                        D{"m, follow(closest) considers people this close", 0.1, 100.0});
+                        "m, follow(closest) considers people this close");
     declareRuntimeField("guide.lost_timeout", gp, guide_params_, &pt::GuideParams::lost_timeout,
-                        D{"s unmatched until Person Lost", 0.0, 60.0});
+                        "s unmatched until Person Lost");
     declareRuntimeField("guide.auto_reacquire", gp, guide_params_, &pt::GuideParams::auto_reacquire,
-                        D{"re-acquire a track appearing near the lost guide", {}, {}});
+                        "re-acquire a track appearing near the lost guide");
     declareRuntimeField("guide.reacquire_radius", gp, guide_params_, &pt::GuideParams::reacquire_radius,
-                        D{"m around the last guide position", 0.0, 20.0});
+                        "m around the last guide position");
     declareRuntimeField("guide.reacquire_window", gp, guide_params_, &pt::GuideParams::reacquire_window,
-                        D{"s before Person Lost falls back to Search", 0.0, 3600.0});
+                        "s before Person Lost falls back to Search");
 
     // Masking (masking.hpp; Yuan §3.2.1).
     mask_mode_ = declareRuntime<std::string>("mask.people", "all", D{"whom scan_filtered hides: all (published tracks) | guide (Yuan §3.2.1) | none", {}, {}},
         [this](const std::string& x) { mask_mode_ = x; });
     if (auto bad = checkChoice("mask.people", mask_mode_)) throw std::invalid_argument(*bad);
     declareRuntimeField("mask.leg_radius", mask_, mask_, &pt::MaskParams::leg_radius,
-                        D{"m, added to half the leg separation", 0.0, 1.0});
+                        "m, added to half the leg separation");
     declareRuntimeField("mask.margin", mask_, mask_, &pt::MaskParams::margin,
-                        D{"m, safety margin of r_P", 0.0, 2.0});
+                        "m, safety margin of r_P");
     declareRuntimeField("mask.default_radius", mask_, mask_, &pt::MaskParams::default_radius,
-                        D{"m, r_P when the leg separation is unknown", 0.05, 3.0});
+                        "m, r_P when the leg separation is unknown");
     declareRuntimeField("mask.min_radius", mask_, mask_, &pt::MaskParams::min_radius,
-                        D{"m, smallest r_P", 0.0, 3.0});
+                        "m, smallest r_P");
     const std::string mask_kind = declareRuntime<std::string>("mask.mode", "inside", D{"inside: only returns inside the circle | tangents: every beam between the tangents (Yuan §3.2.1)", {}, {}},
         [this](const std::string& x) { mask_kind_ = pt::parseMaskMode(x, "parameter 'mask.mode'"); });
     if (auto bad = checkChoice("mask.mode", mask_kind)) throw std::invalid_argument(*bad);
@@ -273,11 +275,23 @@ class PeopleTracker : public cairn::Node {
     return value;
   }
   // The common case: a field of a parameter struct. Declared with `initial.*field` as default (the value goes back
-  // there); a run-time change sets `staged.*field`.
+  // there); a run-time change sets `staged.*field`. Numbers take their range from the core's table.
   template <class S, class T>
-  void declareRuntimeField(const std::string& name, S& initial, S& staged, T S::*field,
-                           const cairn::ParameterDescriptor& desc) {
-    initial.*field = declareRuntime<T>(name, initial.*field, desc, [&staged, field](const T& x) { staged.*field = x; });
+  void declareRuntimeField(const std::string& name, S& initial, S& staged, T S::*field, const std::string& desc) {
+    const cairn::ParameterDescriptor d =
+        std::is_same_v<T, bool> ? cairn::ParameterDescriptor{desc, {}, {}} : rangedDescriptor(name, desc);
+    initial.*field = declareRuntime<T>(name, initial.*field, d, [&staged, field](const T& x) { staged.*field = x; });
+  }
+  // A construction-time parameter whose range is in the core's table (param_ranges.hpp).
+  template <class T>
+  T declareRanged(const std::string& name, const T& def, const std::string& desc) {
+    cairn::ParameterDescriptor d = rangedDescriptor(name, desc);
+    d.read_only = true;
+    return declare_parameter<T>(name, def, d);
+  }
+  static cairn::ParameterDescriptor rangedDescriptor(const std::string& name, const std::string& desc) {
+    const pt::ParamRange r = pt::paramRange(name);
+    return cairn::ParameterDescriptor{desc, r.lo, r.hi};
   }
 
   // The string parameters' choices; the reason when `value` is not one of them.

@@ -1,6 +1,7 @@
 #include "cairn/people_tracking/assignment.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace cairn::people_tracking {
@@ -52,8 +53,9 @@ std::vector<int> solveAssignment(const Eigen::MatrixXd& cost, double forbidden) 
   const auto rows = cost.rows(), cols = cost.cols();
   std::vector<int> result(static_cast<std::size_t>(rows), -1);
   if (rows == 0 || cols == 0) return result;
-  // Clamp forbidden entries to one finite big value so the potentials stay finite.
-  const Eigen::MatrixXd c = cost.cwiseMin(forbidden);
+  // Clamp forbidden entries to one finite big value so the potentials stay finite; a non-finite cost (NaN from a
+  // degenerate covariance) is forbidden too — NaN compares false everywhere and the augmenting search would never end.
+  const Eigen::MatrixXd c = cost.unaryExpr([forbidden](double x) { return std::isfinite(x) ? std::min(x, forbidden) : forbidden; });
   if (rows <= cols) {
     result = hungarian(c);
   } else {
@@ -62,7 +64,7 @@ std::vector<int> solveAssignment(const Eigen::MatrixXd& cost, double forbidden) 
       if (col_to_row[j] >= 0) result[static_cast<std::size_t>(col_to_row[j])] = static_cast<int>(j);
   }
   for (std::size_t i = 0; i < result.size(); ++i)
-    if (result[i] >= 0 && cost(static_cast<long>(i), result[i]) >= forbidden) result[i] = -1;
+    if (result[i] >= 0 && !(c(static_cast<long>(i), result[i]) < forbidden)) result[i] = -1;
   return result;
 }
 

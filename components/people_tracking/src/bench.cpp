@@ -1,4 +1,5 @@
 #include "cairn/people_tracking/bench.hpp"
+#include "cairn/people_tracking/param_ranges.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -173,12 +174,17 @@ BenchResult runBench(const BenchParams& params) {
   if (!auto_world && !params.world_geometry)
     throw InputError("world '" + params.world + "': only --world auto without the simulator component (cairn-people "
                      "built with components/sim reads its worlds)");
-  if (!(params.scan_rate > 0.0)) throw InputError("scan rate must be positive");
+  // 1 kHz: above any 2D laser's rate (10-50 Hz); a rate of 1e9 replayed forever before.
+  if (!(params.scan_rate > 0.0 && params.scan_rate <= 1000.0))
+    throw InputError("scan rate (--rate) must be in (0, 1000] Hz, got " + numberText(params.scan_rate));
+  if (!(params.start >= 0.0)) throw InputError("start (--start) must be >= 0 s, got " + numberText(params.start));
+  if (!(params.duration >= 0.0))
+    throw InputError("duration (--duration) must be >= 0 s (0: to the end), got " + numberText(params.duration));
   if (!params.laser_fov_set && (params.laser_beams < 8 || params.laser_beams > 100000))
     throw InputError("laser_beams (--beams) must be in [8, 100000], got " + std::to_string(params.laser_beams));
   if (!(params.trajectory_smoothing >= 0.0 && params.trajectory_smoothing <= 10.0))
     throw InputError("trajectory smoothing (--smooth) must be in [0, 10] s, got " +
-                     std::to_string(params.trajectory_smoothing));
+                     numberText(params.trajectory_smoothing));
   const CameraModel& cam = params.camera;
   if (!(cam.fov >= 0.0 && cam.fov <= 2 * M_PI) || !(cam.range > 0.0 && cam.range <= 100.0) ||
       !(cam.bearing_sigma >= 0.0 && cam.bearing_sigma < 1.0) || !(cam.range_sigma >= 0.0 && cam.range_sigma < 1.0) ||
@@ -186,10 +192,6 @@ BenchResult runBench(const BenchParams& params) {
       !(cam.false_per_scan >= 0.0 && cam.false_per_scan <= 100.0))
     throw InputError("camera model out of range (fov [0, 360] deg, range (0, 100] m, bearing sigma [0, 57) deg, "
                      "range sigma [0, 1), detection probability [0, 1], false detections [0, 100] per scan)");
-  const FusionParams& fusion = params.tracker.fusion;
-  if (!(fusion.max_pair_distance >= 0.0 && fusion.max_pair_distance <= 100.0) ||
-      !(fusion.gate_chi2 >= 0.0 && fusion.gate_chi2 <= 1000.0))
-    throw InputError("fusion: --fusion-distance must be in [0, 100] m and --fusion-gate in [0, 1000]");
   if (params.oracle_detections && !(params.oracle_sigma > 0.0 && params.oracle_sigma < 10.0))
     throw InputError("oracle sigma must be in (0, 10) m");
   const TrajectorySet traj = [&] {
@@ -197,6 +199,9 @@ BenchResult runBench(const BenchParams& params) {
     if (params.trajectory_smoothing > 0.0) smoothTrajectories(t, params.trajectory_smoothing);
     return t;
   }();
+  if (traj.t_begin + params.start > traj.t_end)
+    throw InputError("start (--start) " + numberText(params.start) + " s is beyond the end of " + params.trajectories +
+                     " (" + numberText(traj.t_end - traj.t_begin) + " s long)");
   const std::string model_path =
       params.model.empty() ? defaultModelPath(ClassifierKind::kAdaBoost, "arras14") : params.model;
   auto classifier = std::make_shared<const LegClassifier>(LegClassifier::load(model_path));

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/ml.hpp>
 
@@ -144,7 +145,14 @@ ClassifierMetrics LegClassifier::evaluate(const std::vector<LabelledCluster>& sa
   return m;
 }
 
+void LegClassifier::checkWritable(const std::string& path) {
+  // Probed with the standard library first: OpenCV would log its own multi-line error for an unwritable path.
+  if (std::filesystem::is_directory(path) || !std::ofstream(path, std::ios::app))
+    throw InputError("cannot write model file " + path);
+}
+
 void LegClassifier::save(const std::string& path) const {
+  checkWritable(path);
   try {
     cv::FileStorage fs(path, cv::FileStorage::WRITE);
     if (!fs.isOpened()) throw InputError("cannot write model file " + path);
@@ -160,7 +168,7 @@ void LegClassifier::save(const std::string& path) const {
     impl_->model->write(fs);
     fs << "}";
   } catch (const cv::Exception& e) {
-    throw InputError("cannot write model file " + path + ": " + e.what());
+    throw InputError("cannot write model file " + path + ": " + e.err);  // err: the message without OpenCV's file/line
   }
 }
 
@@ -203,7 +211,7 @@ LegClassifier LegClassifier::load(const std::string& path) {
     if (!impl->model->isTrained() || impl->model->getVarCount() != static_cast<int>(d))
       throw InputError("model file " + path + ": model is not trained or has the wrong input size");
   } catch (const cv::Exception& e) {
-    throw InputError("corrupt model file " + path + ": " + e.what());
+    throw InputError("corrupt model file " + path + ": " + e.err);
   }
   return LegClassifier(std::move(impl));
 }

@@ -7,8 +7,10 @@
 #include <functional>
 #include <limits>
 #include <numeric>
+#include <utility>
 
 #include "cairn/people_tracking/assignment.hpp"
+#include "cairn/people_tracking/param_ranges.hpp"
 
 namespace cairn::people_tracking {
 
@@ -20,7 +22,54 @@ Association associationFromString(const std::string& s) {
   throw InputError("unknown association '" + s + "' (gnn|jpda)");
 }
 
-PeopleTracker::PeopleTracker(TrackerParams params) : params_(params) {}
+namespace {
+// Every numeric parameter against its range (param_ranges.hpp): a negative process noise or a zero gate would
+// otherwise give NaN costs and covariances instead of an error.
+void checkParams(const TrackerParams& p) {
+  const std::pair<const char*, double> values[] = {
+      {"tracker.process_noise", p.process_noise},
+      {"tracker.maneuver_process_noise", p.maneuver_process_noise},
+      {"tracker.maneuver_rate", p.maneuver_rate},
+      {"tracker.maneuver_end_rate", p.maneuver_end_rate},
+      {"tracker.initial_velocity_sigma", p.initial_velocity_sigma},
+      {"tracker.gate_chi2", p.gate_chi2},
+      {"tracker.confirm_hits", p.confirm_hits},
+      {"tracker.tentative_timeout", p.tentative_timeout},
+      {"tracker.delete_timeout", p.delete_timeout},
+      {"tracker.max_position_sigma", p.max_position_sigma},
+      {"tracker.min_init_distance", p.min_init_distance},
+      {"tracker.publish_coast_time", p.publish_coast_time},
+      {"tracker.max_dt", p.max_dt},
+      {"tracker.detection_probability", p.detection_probability},
+      {"tracker.clutter_density", p.clutter_density},
+      {"tracker.jpda_max_events", p.jpda_max_events},
+      {"tracker.min_detection_confidence", p.min_detection_confidence},
+      {"tracker.confidence_gain", p.confidence_gain},
+      {"tracker.leg_spread_sigma", p.leg_spread_sigma},
+      {"tracker.leg_spread_lateral_sigma", p.leg_spread_lateral_sigma},
+      {"tracker.leg_spread_min_speed", p.leg_spread_min_speed},
+      {"tracker.leg_gate_chi2", p.leg_gate_chi2},
+      {"tracker.reid_window", p.reid_window},
+      {"tracker.reid_gate_chi2", p.reid_gate_chi2},
+      {"tracker.visibility_radius", p.visibility_radius},
+      {"tracker.occluded_coast_time", p.occluded_coast_time},
+      {"tracker.occluded_delete_timeout", p.occluded_delete_timeout},
+      {"tracker.free_space_delete_scans", p.free_space_delete_scans},
+      {"tracker.split_scans", p.split_scans},
+      {"tracker.single_leg_stride_sigma", p.single_leg_stride_sigma},
+      {"static_map.margin", p.static_map_margin},
+      {"fusion.max_pair_distance", p.fusion.max_pair_distance},
+      {"fusion.gate_chi2", p.fusion.gate_chi2},
+  };
+  for (const auto& [name, value] : values) {
+    const ParamRange r = paramRange(name);
+    if (!(value >= r.lo && value <= r.hi))
+      throw InputError(std::string("tracker parameter ") + name + " must be in " + rangeText(r) + ", got " + numberText(value));
+  }
+}
+}  // namespace
+
+PeopleTracker::PeopleTracker(TrackerParams params) : params_(params) { checkParams(params_); }
 
 void PeopleTracker::reset() {
   tracks_.clear();

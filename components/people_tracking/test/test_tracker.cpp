@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <set>
 #include <algorithm>
@@ -42,6 +43,37 @@ TEST(Assignment, SolvesSquareAndRectangularProblems) {
   f << 1e9, 1, 1e9, 2;  // both rows want column 1; row 0 wins (cheaper), row 1 stays unassigned
   EXPECT_EQ(solveAssignment(f, 1e9), (std::vector<int>{1, -1}));
   EXPECT_TRUE(solveAssignment(Eigen::MatrixXd(0, 3)).empty());
+  // Non-finite costs (NaN from a degenerate covariance) are forbidden; before, NaN made the search loop forever.
+  const double nan = std::nan("");
+  Eigen::MatrixXd n(2, 2);
+  n << nan, 1, 2, nan;
+  EXPECT_EQ(solveAssignment(n, 1e9), (std::vector<int>{1, 0}));
+  n << nan, nan, std::numeric_limits<double>::infinity(), nan;
+  EXPECT_EQ(solveAssignment(n, 1e9), (std::vector<int>{-1, -1}));
+}
+
+TEST(Tracker, RejectsParametersOutOfRange) {
+  EXPECT_NO_THROW(PeopleTracker{TrackerParams{}});
+  auto message = [](TrackerParams p) {
+    try {
+      PeopleTracker t(p);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  TrackerParams p;
+  p.process_noise = -1.0;  // made every covariance NaN and the assignment loop forever (cairn people bench hung)
+  EXPECT_EQ(message(p), "tracker parameter tracker.process_noise must be in [1e-06, 100], got -1");
+  p = {};
+  p.max_position_sigma = 0.0;
+  EXPECT_NE(message(p).find("tracker.max_position_sigma"), std::string::npos);
+  p = {};
+  p.fusion.gate_chi2 = std::nan("");
+  EXPECT_NE(message(p).find("fusion.gate_chi2"), std::string::npos);
+  p = {};
+  p.confirm_hits = 0;
+  EXPECT_NE(message(p).find("tracker.confirm_hits must be in [1, 100], got 0"), std::string::npos);
 }
 
 TEST(Tracker, ConstantVelocityTargetIsConfirmedAndItsVelocityEstimated) {

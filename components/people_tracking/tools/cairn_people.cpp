@@ -44,34 +44,44 @@ struct Args {
   std::exit(2);
 }
 
-Args parse(int argc, char** argv, int first, const std::vector<std::string>& bool_flags) {
+// The verb's options: `values` take a value, `bool_flags` do not; anything else is an error (a typo such as
+// --scene for --scenes would otherwise run with the default).
+Args parse(int argc, char** argv, int first, const std::string& verb, const std::vector<std::string>& values,
+           const std::vector<std::string>& bool_flags) {
   Args a;
+  auto known = [](const std::vector<std::string>& list, const std::string& s) {
+    return std::find(list.begin(), list.end(), s) != list.end();
+  };
   for (int i = first; i < argc; ++i) {
     std::string s = argv[i];
     if (s.rfind("--", 0) != 0) fail("unexpected argument '" + s + "'");
     s = s.substr(2);
-    bool is_flag = false;
-    for (const auto& f : bool_flags) is_flag |= (f == s);
-    if (is_flag) {
+    if (known(bool_flags, s)) {
       a.flags.push_back(s);
-    } else {
+    } else if (known(values, s)) {
       if (i + 1 >= argc) fail("option --" + s + " needs a value");
       a.kv[s] = argv[++i];
+    } else {
+      fail(verb + ": unknown option --" + s + " (cairn people --help)");
     }
   }
   return a;
 }
 
+// An option given with an empty value ("--scenes ''") is an error, not the default.
 long long toInteger(const Args& a, const std::string& k, long long def, long long lo, long long hi) {
-  const std::string v = a.get(k, "");
-  if (v.empty()) return def;
-  return parseInteger("--" + k, v, lo, hi);
+  return a.kv.count(k) ? parseInteger("--" + k, a.kv.at(k), lo, hi) : def;
 }
 
 double toDouble(const Args& a, const std::string& k, double def) {
-  const std::string v = a.get(k, "");
-  if (v.empty()) return def;
-  return parseNumber("--" + k, v);
+  return a.kv.count(k) ? parseNumber("--" + k, a.kv.at(k)) : def;
+}
+
+// A number option that must be > 0.
+double toPositive(const Args& a, const std::string& k, double def) {
+  const double x = toDouble(a, k, def);
+  if (!(x > 0.0)) fail("option --" + k + " expects a number > 0, got '" + a.get(k, "") + "'");
+  return x;
 }
 
 void usage() {
@@ -169,9 +179,9 @@ int train(const Args& a) {
   p.kind = classifierKindFromString(a.get("kind", "adaboost"));
   p.feature_set = a.get("features", "arras14@1");
   p.boost_weak_count = static_cast<int>(toInteger(a, "weak-count", p.boost_weak_count, 1, 100000));
-  p.svm_c = toDouble(a, "svm-c", p.svm_c);
-  p.svm_gamma = toDouble(a, "svm-gamma", p.svm_gamma);
-  p.positive_weight = toDouble(a, "pos-weight", p.positive_weight);
+  p.svm_c = toPositive(a, "svm-c", p.svm_c);
+  p.svm_gamma = toPositive(a, "svm-gamma", p.svm_gamma);
+  p.positive_weight = toPositive(a, "pos-weight", p.positive_weight);
   TrainingDataParams d;
   // --data only: the CSV files; --data and --scenes: both (a mix); neither: generated scenes.
   d.scenes = static_cast<int>(toInteger(a, "scenes", a.has("data") ? 0 : 1500, 0, 10000000));
@@ -180,6 +190,7 @@ int train(const Args& a) {
   d.scene.group_probability = groupProbability(a);
   const std::string out = a.get("out", "");
   if (out.empty()) fail("train needs --out FILE");
+  LegClassifier::checkWritable(out);  // before the training, not after it
   auto samples = generateLabelledClusters(d);
   const std::vector<LabelledCluster> data = loadData(a.get("data", ""));
   samples.insert(samples.end(), data.begin(), data.end());
@@ -234,8 +245,12 @@ int main(int argc, char** argv) {
   }
   const std::string verb = argv[1];
   try {
-    if (verb == "train") return train(parse(argc, argv, 2, {}));
-    if (verb == "eval") return eval(parse(argc, argv, 2, {"json"}));
+    if (verb == "train")
+      return train(parse(argc, argv, 2, verb,
+                         {"kind", "features", "weak-count", "svm-c", "svm-gamma", "pos-weight", "scenes", "seed",
+                          "min-points", "groups", "data", "out"},
+                         {}));
+    if (verb == "eval") return eval(parse(argc, argv, 2, verb, {"model", "scenes", "seed", "groups", "data"}, {"json"}));
     if (verb == "bench") return runBenchVerb(argc, argv);
 #ifdef CAIRN_PEOPLE_SIM
     if (verb == "gen-train") {
@@ -246,7 +261,10 @@ int main(int argc, char** argv) {
         if (x == "-o") x = "--o";
         ptrs.push_back(x.data());
       }
-      return genTrain(parse(argc, ptrs.data(), 2, {}));
+      return genTrain(parse(argc, ptrs.data(), 2, verb,
+                            {"worlds", "episodes", "seed", "scans-per-episode", "walker-area", "max-walkers",
+                             "scene-generator", "o", "out"},
+                            {}));
     }
 #else
     if (verb == "gen-train") fail("gen-train was not built (needs the sim component)");

@@ -6,8 +6,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "cairn/people_tracking/param_ranges.hpp"
 #include "cairn/people_tracking/scan.hpp"  // InputError
 
 namespace cairn::people_tracking {
@@ -34,6 +36,22 @@ inline long long parseInteger(const std::string& option, const std::string& text
     throw InputError("option " + option + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
                      "], got '" + text + "'");
   return x;
+}
+
+// The value of `option`, which sets the core parameter `param` (param_ranges.hpp, the component's ranges), as a
+// number inside that parameter's range.
+inline double parseParam(const std::string& option, const std::string& text, std::string_view param) {
+  const double x = parseNumber(option, text);
+  const ParamRange r = paramRange(param);
+  if (!(x >= r.lo && x <= r.hi))
+    throw InputError("option " + option + " expects a number in " + rangeText(r) + ", got '" + text + "'");
+  return x;
+}
+
+// The same for an integer parameter.
+inline long long parseIntegerParam(const std::string& option, const std::string& text, std::string_view param) {
+  const ParamRange r = paramRange(param);
+  return parseInteger(option, text, std::llround(r.lo), std::llround(r.hi));
 }
 
 // "a,b,c" -> {"a", "b", "c"}; every field is kept, empty ones too ("" -> {""}, "a," -> {"a", ""}).

@@ -382,6 +382,10 @@ int runMaskBenchVerb(int argc, char** argv) {
   if (!(p.fov_deg >= 30.0 && p.fov_deg <= 360.0)) throw InputError("--fov-deg must be in [30, 360]");
   if (!(p.range_max >= 2.0 && p.range_max <= 80.0)) throw InputError("--range-max must be in [2, 80] m");
   if (!(p.follow_distance > 0.3 && p.follow_distance < 5.0)) throw InputError("--follow-distance must be in (0.3, 5) m");
+  if (!(p.lead >= 0.0 && p.lead <= 10.0)) throw InputError("--lead must be in [0, 10] m");
+  if (!(std::abs(p.heading_drift) <= 0.5)) throw InputError("--heading-drift must be in [-0.5, 0.5] rad/m");
+  if (!(std::abs(p.scale_error) < 0.5)) throw InputError("--scale-error must be in (-0.5, 0.5)");
+  if (!(p.max_duration > 0.0 && p.max_duration <= 3600.0)) throw InputError("--max-duration must be in (0, 3600] s");
   return printMaskBench(p, runMaskBench(p));
 }
 

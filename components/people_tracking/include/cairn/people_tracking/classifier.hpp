@@ -56,6 +56,9 @@ class LegClassifier {
   // Throws InputError when the file is missing, corrupt, of another format or names unknown features.
   static LegClassifier load(const std::string& path);
   void save(const std::string& path) const;
+  // InputError if `path` cannot be written (checked by save(); tools call it before a long training). Creates the
+  // file if it does not exist and leaves an existing one unchanged.
+  static void checkWritable(const std::string& path);
 
   // Person-likeness in [0, 1]; 0.5 is the decision boundary of the trained model.
   [[nodiscard]] double score(const FeatureVector& features) const;
