@@ -8,6 +8,16 @@
 namespace cairn::bt {
 namespace {
 
+/// A duration port given as a literal must not be negative: a load error (file:line) instead of a node that
+/// silently finishes or fails at once. Values from the blackboard are only known at run time.
+Input<int> durationInput(const NodeConfig& c, const char* port) {
+  Input<int> in = c.input<int>(port);
+  int ms = 0;
+  if (in.isLiteral() && in.get(ms) && ms < 0)
+    throw PortError("port '" + std::string(port) + "' must not be negative, got " + std::to_string(ms));
+  return in;
+}
+
 // ================================================================================================== controls
 /// Sequence (Stüde Alg. 5.1 with BT.CPP's resumption at the running child) and SequenceWithMemory.
 class SequenceNode : public ControlNode {
@@ -428,7 +438,7 @@ class LoopNode : public DecoratorNode {
 
 class TimeoutNode : public DecoratorNode {
  public:
-  explicit TimeoutNode(const NodeConfig& c) : DecoratorNode(c), msec_(c.input<int>("msec")) {}
+  explicit TimeoutNode(const NodeConfig& c) : DecoratorNode(c), msec_(durationInput(c, "msec")) {}
   static PortList providedPorts() { return {InputPort<int>("msec", "timeout in milliseconds")}; }
 
  protected:
@@ -470,7 +480,7 @@ class TimeoutNode : public DecoratorNode {
 
 class DelayNode : public DecoratorNode {
  public:
-  explicit DelayNode(const NodeConfig& c) : DecoratorNode(c), msec_(c.input<int>("delay_msec")) {}
+  explicit DelayNode(const NodeConfig& c) : DecoratorNode(c), msec_(durationInput(c, "delay_msec")) {}
   static PortList providedPorts() { return {InputPort<int>("delay_msec", "delay before ticking the child")}; }
 
  protected:
@@ -709,7 +719,7 @@ class ConstantNode : public SyncActionNode {
 
 class SleepNode : public StatefulActionNode {
  public:
-  explicit SleepNode(const NodeConfig& c) : StatefulActionNode(c), msec_(c.input<int>("msec")) {}
+  explicit SleepNode(const NodeConfig& c) : StatefulActionNode(c), msec_(durationInput(c, "msec")) {}
   static PortList providedPorts() { return {InputPort<int>("msec", "duration in milliseconds")}; }
 
  protected:

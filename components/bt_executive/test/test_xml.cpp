@@ -83,6 +83,12 @@ TEST_F(Xml, ErrorsCarryFileAndLine) {
   EXPECT_EQ(loadError(wrap("<Sleep msec=\"1.5\"/>")),
             "t.xml:1: type mismatch in port 'msec' (int): cannot convert '1.5' to an integer");
   EXPECT_EQ(loadError(wrap("<Sleep msec=\"10\" speed=\"2\"/>")), "t.xml:1: node 'Sleep' has no port 'speed'");
+  EXPECT_EQ(loadError(wrap("<Sleep msec=\"-5\"/>")), "t.xml:1: port 'msec' must not be negative, got -5");
+  EXPECT_EQ(loadError(wrap("<Timeout msec=\"-1\"><AlwaysSuccess/></Timeout>")),
+            "t.xml:1: port 'msec' must not be negative, got -1");
+  EXPECT_EQ(loadError(wrap("<Delay delay_msec=\"-1\"><AlwaysSuccess/></Delay>")),
+            "t.xml:1: port 'delay_msec' must not be negative, got -1");
+  EXPECT_EQ(loadError(wrap("<Sleep msec=\"0\"/>")), "");
   EXPECT_EQ(loadError(wrap("<Sequence>\n<WriteInt out=\"{k}\"/>\n<ReadString in=\"{k}\"/></Sequence>")),
             "t.xml:3: type mismatch: blackboard entry 'k' is int at t.xml:2 and std::string here");
   EXPECT_EQ(loadError(wrap("<ReadPose pose=\"1;2\"/>")),
