@@ -1,5 +1,6 @@
 #include "cairn/bt_executive/trace.hpp"
 
+#include <charconv>
 #include <istream>
 #include <ostream>
 #include <sstream>
@@ -34,6 +35,19 @@ FileLogger::~FileLogger() {
 
 void FileLogger::flush() { os_.flush(); }
 
+namespace {
+constexpr std::string_view kHeader = "# cairn-bt-trace 1";
+
+/// The next space-separated field of `ss` as an unsigned or signed integer, all of it.
+template <class T>
+bool field(std::istringstream& ss, T& out) {
+  std::string tok;
+  if (!(ss >> tok)) return false;
+  const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), out);
+  return ec == std::errc() && end == tok.data() + tok.size();
+}
+}  // namespace
+
 TraceReplay TraceReplay::read(std::istream& is) {
   TraceReplay r;
   std::string line;
@@ -41,6 +55,12 @@ TraceReplay TraceReplay::read(std::istream& is) {
   auto bad = [&](const std::string& m) { throw std::runtime_error("line " + std::to_string(ln) + ": " + m); };
   while (std::getline(is, line)) {
     ++ln;
+    if (ln == 1) {
+      if (line == kHeader) continue;
+      if (line.rfind("# cairn-bt-trace ", 0) == 0)
+        bad("unsupported trace version '" + line.substr(17) + "' (expected '" + std::string(kHeader) + "')");
+      bad("not a cairn-bt trace (the first line must be '" + std::string(kHeader) + "')");
+    }
     if (line.empty() || line[0] == '#') continue;
     std::istringstream ss(line);
     char kind = 0;
@@ -48,13 +68,16 @@ TraceReplay TraceReplay::read(std::istream& is) {
     if (kind == 'N') {
       std::uint32_t uid;
       std::string path;
-      if (!(ss >> uid) || !std::getline(ss >> std::ws, path) || path.empty()) bad("bad node record");
+      if (!field(ss, uid) || !std::getline(ss >> std::ws, path) || path.empty()) bad("bad node record");
       if (uid != r.paths_.size()) bad("node ids must be consecutive from 0");
       r.paths_.push_back(path);
     } else if (kind == 'E') {
       RecordedTransition t{};
-      std::string o, n;
-      if (!(ss >> t.step >> t.time_ns >> t.uid >> o >> n)) bad("bad event record");
+      std::string o, n, extra;
+      if (!field(ss, t.step) || !field(ss, t.time_ns) || !field(ss, t.uid) || !(ss >> o >> n))
+        bad("bad event record (expected E <step> <time_ns> <uid> <OLD> <NEW>)");
+      if (ss >> extra) bad("bad event record: unexpected '" + extra + "' after the new status");
+      if (t.time_ns < 0) bad("negative time " + std::to_string(t.time_ns));
       auto os = statusFromString(o), ns = statusFromString(n);
       if (!os || !ns) bad("bad status");
       if (t.uid >= r.paths_.size()) bad("event for unknown node " + std::to_string(t.uid));
@@ -66,6 +89,8 @@ TraceReplay TraceReplay::read(std::istream& is) {
       bad("unknown record '" + std::string(1, kind) + "'");
     }
   }
+  if (is.bad()) throw std::runtime_error("line " + std::to_string(ln + 1) + ": read error");
+  if (ln == 0) throw std::runtime_error("line 1: empty file, not a cairn-bt trace (expected '" + std::string(kHeader) + "')");
   return r;
 }
 

@@ -346,6 +346,14 @@ TEST(BtWatchCli, RendersTheLiveTreeOfARunningExecutiveFromItsStatusTopic) {
   const auto [out2, rc2] = runCommand(std::string(CAIRN_BT_EXE) + " watch --topic /nobody/bt/status --once --timeout 0.5");
   EXPECT_EQ(rc2, 1) << out2;
   EXPECT_NE(out2.find("cairn: /nobody/bt/status: no tree status within 0.5 s"), std::string::npos) << out2;
+
+  // names DDS or the node reject: one line and exit 2, not an uncaught exception
+  for (const std::string& topic : {std::string("''"), std::string("'bad topic!!'")}) {
+    const auto [out3, rc3] = runCommand(std::string(CAIRN_BT_EXE) + " watch --topic " + topic + " --once --timeout 1");
+    EXPECT_EQ(rc3, 2) << out3;
+    EXPECT_EQ(out3.rfind("cairn: watch --topic", 0), 0u) << out3;
+    EXPECT_EQ(std::count(out3.begin(), out3.end(), '\n'), 1) << out3;
+  }
 }
 
 // ------------------------------------------------------------------------------------------------ runtime nodes

@@ -7,12 +7,18 @@
 //   cairn-bt model                          <TreeNodesModel> of the built-in nodes
 //   cairn-bt psbt-eval [--starts N] [--seed S] [--n-pl N] [--hotspots K] [--xml FILE]
 //                                           model-based comparison of Stüde §5.4.4 on a synthetic 50 m x 25 m map
+#include <charconv>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <thread>
 
@@ -59,10 +65,53 @@ class StepScheduler final : public Scheduler {
   TimerId id_ = 0;
 };
 
-bool parseInt(const char* s, long& out) {
-  char* end = nullptr;
-  out = std::strtol(s, &end, 10);
-  return end && *end == '\0' && end != s;
+/// Bad command-line input: main() prints "cairn: <what>" (one line) and exits 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// The value after the option argv[i] (advances i).
+const char* optionValue(int argc, char** argv, int& i) {
+  if (i + 1 >= argc) throw UsageError(std::string(argv[i]) + " needs a value");
+  return argv[++i];
+}
+
+/// The integer after the option argv[i], which must lie in [lo, hi] (advances i).
+long intOption(int argc, char** argv, int& i, long lo, long hi) {
+  const std::string opt = argv[i];
+  const std::string_view v = optionValue(argc, argv, i);
+  long x = 0;
+  const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
+  if (v.empty() || ec != std::errc() || end != v.data() + v.size() || x < lo || x > hi)
+    throw UsageError(opt + " needs an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" +
+                     std::string(v) + "'");
+  return x;
+}
+
+/// The number (finite, decimal) after the option argv[i], which must lie in [lo, hi] (advances i).
+double numberOption(int argc, char** argv, int& i, double lo, double hi) {
+  const std::string opt = argv[i];
+  const std::string_view v = optionValue(argc, argv, i);
+  double x = 0;
+  const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
+  if (v.empty() || ec != std::errc() || end != v.data() + v.size() || !std::isfinite(x) || x < lo || x > hi) {
+    char range[64];
+    std::snprintf(range, sizeof range, "[%g, %g]", lo, hi);
+    throw UsageError(opt + " needs a number in " + range + ", got '" + std::string(v) + "'");
+  }
+  return x;
+}
+
+/// The whole content of `file`; throws UsageError("FILE: ...") for a directory or a read error.
+std::string readWholeFile(const std::string& file) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) throw UsageError(file + ": is a directory, not a trace file");
+  std::ifstream is(file, std::ios::binary);
+  if (!is) throw UsageError(file + ": cannot open");
+  std::ostringstream ss;
+  ss << is.rdbuf();
+  if (is.bad()) throw UsageError(file + ": cannot read");
+  return ss.str();
 }
 
 int cmdRun(int argc, char** argv) {
@@ -70,38 +119,28 @@ int cmdRun(int argc, char** argv) {
   long max_ticks = 50, period_ms = 20;
   bool trace = false, wait = true;
   for (int i = 0; i < argc; ++i) {
-    std::string a = argv[i];
-    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+    const std::string a = argv[i];
     if (a == "--tree") {
-      const char* v = next();
-      if (!v) return usage();
-      tree_id = v;
-    } else if (a == "--max-ticks" || a == "--period-ms") {
-      const char* v = next();
-      long x;
-      if (!v || !parseInt(v, x) || x < 0) {
-        std::fprintf(stderr, "cairn: %s needs a non-negative integer\n", a.c_str());
-        return 2;
-      }
-      (a == "--max-ticks" ? max_ticks : period_ms) = x;
+      tree_id = optionValue(argc, argv, i);
+    } else if (a == "--max-ticks") {
+      max_ticks = intOption(argc, argv, i, 0, 100'000'000);  // both bounds keep the step clock (ns) within int64
+    } else if (a == "--period-ms") {
+      period_ms = intOption(argc, argv, i, 0, 60'000);
     } else if (a == "--trace") {
       trace = true;
     } else if (a == "--no-wait") {
       wait = false;
     } else if (a == "--log") {
-      const char* v = next();
-      if (!v) return usage();
-      log_file = v;
+      log_file = optionValue(argc, argv, i);
     } else if (!a.empty() && a[0] == '-') {
-      std::fprintf(stderr, "cairn: unknown option %s\n", a.c_str());
-      return 2;
+      throw UsageError("run: unknown option " + a);
     } else if (file.empty()) {
       file = a;
     } else {
-      return usage();
+      throw UsageError("run: one tree file only, got '" + file + "' and '" + a + "'");
     }
   }
-  if (file.empty()) return usage();
+  if (file.empty()) throw UsageError("run: missing the tree file (cairn bt run <file.xml>)");
 
   NodeFactory factory;
   Tree tree;
@@ -165,21 +204,24 @@ int cmdRun(int argc, char** argv) {
   }
 }
 
-int cmdReplay(int argc, char** argv) {
-  if (argc != 1) return usage();
-  std::ifstream is(argv[0]);
-  if (!is) {
-    std::fprintf(stderr, "cairn: %s: cannot open\n", argv[0]);
-    return 2;
-  }
+/// Parses the trace text of `file`; a malformed trace is a UsageError "FILE:LINE: ...".
+TraceReplay parseTrace(const std::string& file, const std::string& text) {
+  std::istringstream ss(text);
   try {
-    TraceReplay r = TraceReplay::read(is);
-    for (const auto& t : r.transitions())
-      std::printf("%s\n", formatTransition(t.step, r.paths()[t.uid], t.old_status, t.new_status).c_str());
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "cairn: %s:%s\n", argv[0], e.what() + 4);
-    return 2;
+    return TraceReplay::read(ss);
+  } catch (const std::runtime_error& e) {
+    std::string m = e.what();  // "line N: ..."
+    if (m.rfind("line ", 0) == 0) m.erase(0, 5);
+    throw UsageError(file + ":" + m);
   }
+}
+
+int cmdReplay(int argc, char** argv) {
+  if (argc != 1) throw UsageError("replay takes one trace file (cairn bt replay <trace.log>)");
+  const std::string file = argv[0];
+  const TraceReplay r = parseTrace(file, readWholeFile(file));
+  for (const auto& t : r.transitions())
+    std::printf("%s\n", formatTransition(t.step, r.paths()[t.uid], t.old_status, t.new_status).c_str());
   return 0;
 }
 
@@ -194,11 +236,16 @@ int watchTopic(const std::string& topic, long count, double timeout_s) {
   cairn::Node node(o);
   std::mutex mu;
   std::deque<cairn_bt_msgs::msg::TreeStatus> frames;
-  auto sub = node.create_subscription<cairn_bt_msgs::msg::TreeStatus>(
-      topic, cairn::QoS::latched(), [&](const cairn_bt_msgs::msg::TreeStatus& s) {
-        std::lock_guard l(mu);
-        frames.push_back(s);
-      });
+  std::shared_ptr<cairn::Subscription<cairn_bt_msgs::msg::TreeStatus>> sub;
+  try {
+    sub = node.create_subscription<cairn_bt_msgs::msg::TreeStatus>(
+        topic, cairn::QoS::latched(), [&](const cairn_bt_msgs::msg::TreeStatus& s) {
+          std::lock_guard l(mu);
+          frames.push_back(s);
+        });
+  } catch (const std::exception& e) {  // a name DDS rejects ("bad topic!!")
+    throw UsageError("watch --topic '" + topic + "': " + e.what());
+  }
   cairn::Executor::install_signal_handlers();
   const bool tty = isatty(fileno(stdout));
   const auto wait = timeout_s > 0 ? std::chrono::nanoseconds(static_cast<std::int64_t>(timeout_s * 1e9))
@@ -247,13 +294,15 @@ int cmdWatch(int argc, char** argv) {
     long count = 0;
     double timeout_s = 0;
     for (int i = 1; i < argc; ++i) {
-      std::string a = argv[i];
+      const std::string a = argv[i];
       if (a == "--once") count = 1;
-      else if (a == "--count" && i + 1 < argc && parseInt(argv[i + 1], count) && count > 0) ++i;
-      else if (a == "--timeout" && i + 1 < argc) timeout_s = std::atof(argv[++i]);
+      else if (a == "--count") count = intOption(argc, argv, i, 1, std::numeric_limits<long>::max());
+      else if (a == "--timeout") timeout_s = numberOption(argc, argv, i, 0, 86400);  // 0: wait forever
       else if (i == 1 && a.rfind("--", 0) != 0) topic = a;
-      else return usage();
+      else if (a.rfind("--", 0) == 0) throw UsageError("watch --topic: unknown option " + a);
+      else throw UsageError("watch --topic: unexpected argument '" + a + "' (the topic name goes right after --topic)");
     }
+    if (topic.empty()) throw UsageError("watch --topic: empty topic name");
 #ifdef CAIRN_BT_WITH_RUNTIME
     return watchTopic(topic, count, timeout_s);
 #else
@@ -262,36 +311,28 @@ int cmdWatch(int argc, char** argv) {
 #endif
   }
   for (int i = 0; i < argc; ++i) {
-    std::string a = argv[i];
+    const std::string a = argv[i];
     if (a == "--follow") follow = true;
-    else if (a == "--interval-ms" && i + 1 < argc && parseInt(argv[i + 1], interval)) ++i;
+    else if (a == "--interval-ms") interval = intOption(argc, argv, i, 1, 3'600'000);
+    else if (a.rfind("--", 0) == 0) throw UsageError("watch: unknown option " + a);
     else if (file.empty()) file = a;
-    else return usage();
+    else throw UsageError("watch: one trace file only, got '" + file + "' and '" + a + "'");
   }
-  if (file.empty()) return usage();
+  if (file.empty()) throw UsageError("watch: missing the trace file (cairn bt watch <trace.log> or --topic)");
   const bool tty = isatty(fileno(stdout));
   std::uintmax_t last_size = static_cast<std::uintmax_t>(-1);
   for (;;) {
-    std::ifstream is(file);
-    if (!is) {
-      std::fprintf(stderr, "cairn: %s: cannot open\n", file.c_str());
-      return 2;
-    }
-    std::string content((std::istreambuf_iterator<char>(is)), std::istreambuf_iterator<char>());
+    std::string content = readWholeFile(file);
     if (content.size() != last_size) {
       last_size = content.size();
       // Ignore a partially written last line.
       if (!content.empty() && content.back() != '\n') content.erase(content.rfind('\n') + 1);
-      std::istringstream ss(content);
-      try {
-        TraceReplay r = TraceReplay::read(ss);
+      if (!(follow && content.empty())) {  // a followed trace may not have its header yet
+        const TraceReplay r = parseTrace(file, content);
         if (tty) std::printf("\033[H\033[2J");
         std::printf("%s  step %llu\n%s", file.c_str(), static_cast<unsigned long long>(r.lastStep()),
                     renderTree(r.paths(), r.statusesAfter(r.lastStep()), tty).c_str());
         std::fflush(stdout);
-      } catch (const std::exception& e) {
-        std::fprintf(stderr, "cairn: %s:%s\n", file.c_str(), e.what() + 4);
-        return 2;
       }
     }
     if (!follow) return 0;
@@ -305,16 +346,18 @@ int cmdPsbtEval(int argc, char** argv) {
   long starts = 500, seed = 1, n_pl = 6, hotspots = 8;
   std::string xml_out;
   for (int i = 0; i < argc; ++i) {
-    std::string a = argv[i];
-    long* target = a == "--starts" ? &starts : a == "--seed" ? &seed : a == "--n-pl" ? &n_pl
-                   : a == "--hotspots" ? &hotspots : nullptr;
-    if (target && i + 1 < argc && parseInt(argv[i + 1], *target) && *target >= 0) {
-      ++i;
-    } else if (a == "--xml" && i + 1 < argc) {
-      xml_out = argv[++i];
-    } else {
-      return usage();
-    }
+    const std::string a = argv[i];
+    if (a == "--starts") starts = intOption(argc, argv, i, 1, 100'000);
+    else if (a == "--seed") seed = intOption(argc, argv, i, 0, std::numeric_limits<long>::max());
+    else if (a == "--n-pl") n_pl = intOption(argc, argv, i, 1, 10);  // 2·3^n candidate trees: ~6 s per start at 10
+    else if (a == "--hotspots") hotspots = intOption(argc, argv, i, 0, 1000);
+    else if (a == "--xml") xml_out = optionValue(argc, argv, i);
+    else throw UsageError("psbt-eval: unknown argument '" + a + "'");
+  }
+  std::ofstream xml_os;
+  if (!xml_out.empty()) {  // before the evaluation, which takes a while
+    xml_os.open(xml_out);
+    if (!xml_os) throw UsageError(xml_out + ": cannot write");
   }
   using namespace cairn::bt::psbt;
   Params p;
@@ -339,9 +382,10 @@ int cmdPsbtEval(int argc, char** argv) {
     plan_total += dt;
     plan_max = std::max(plan_max, dt);
     candidates += syn.candidates;
-    if (s == 0 && !xml_out.empty()) {
-      std::ofstream os(xml_out);
-      os << toXml(m, start, syn.best, p);
+    if (s == 0 && xml_os.is_open()) {
+      xml_os << toXml(m, start, syn.best, p);
+      xml_os.close();
+      if (!xml_os) throw UsageError(xml_out + ": cannot write");
     }
     std::vector<Plan> plans{syn.best};
     for (auto b : {Baseline::GM, Baseline::GC, Baseline::RND, Baseline::W, Baseline::PP})
@@ -380,15 +424,30 @@ int cmdPsbtEval(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   if (argc < 2) return usage();
-  std::string verb = argv[1];
-  if (verb == "run") return cmdRun(argc - 2, argv + 2);
-  if (verb == "replay") return cmdReplay(argc - 2, argv + 2);
-  if (verb == "watch") return cmdWatch(argc - 2, argv + 2);
-  if (verb == "psbt-eval") return cmdPsbtEval(argc - 2, argv + 2);
-  if (verb == "model") {
-    NodeFactory f;
-    std::fputs(writeTreeNodesModel(f, true).c_str(), stdout);
-    return 0;
+  const std::string verb = argv[1];
+  try {
+    if (verb == "run") return cmdRun(argc - 2, argv + 2);
+    if (verb == "replay") return cmdReplay(argc - 2, argv + 2);
+    if (verb == "watch") return cmdWatch(argc - 2, argv + 2);
+    if (verb == "psbt-eval") return cmdPsbtEval(argc - 2, argv + 2);
+    if (verb == "model") {
+      if (argc > 2) throw UsageError("model takes no arguments");
+      NodeFactory f;
+      std::fputs(writeTreeNodesModel(f, true).c_str(), stdout);
+      return 0;
+    }
+    if (verb == "-h" || verb == "--help" || verb == "help") {
+      usage();
+      return 0;
+    }
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "cairn: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {  // not the input: e.g. DDS unavailable
+    std::fprintf(stderr, "cairn: %s: %s\n", verb.c_str(), e.what());
+    return 1;
   }
-  return usage();
+  std::fprintf(stderr, "cairn: unknown verb '%s' (run, replay, watch, model, psbt-eval; see cairn bt --help)\n",
+               verb.c_str());
+  return 2;
 }

@@ -43,7 +43,8 @@ struct RecordedTransition {
 
 class TraceReplay {
  public:
-  /// Parses a trace; throws std::runtime_error("line N: ...") on malformed input.
+  /// Parses a trace; throws std::runtime_error("line N: ...") on malformed input: no '# cairn-bt-trace 1' first
+  /// line (also an empty stream or another version), a record with missing or extra fields, a negative time.
   static TraceReplay read(std::istream& is);
   const std::vector<std::string>& paths() const { return paths_; }
   const std::vector<RecordedTransition>& transitions() const { return events_; }
