@@ -7,6 +7,8 @@
 
 #include <chrono>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "support/subprocess.hpp"
 
@@ -143,4 +145,39 @@ TEST(Cli, InvalidSpecIsRejectedBeforeAnythingStarts) {
   // the demo's relative paths (urdf/...) are relative to the repository root, where the README runs it
   r = run("cd " + kSpecs + " && " + kCairn + " launch launch_specs/demo.yaml --check");
   EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+TEST(Cli, BadOptionValuesAreOneLineErrorsBeforeAnythingStarts) {
+  const std::string spec = kSpecs + "/launch_specs/talker_listener.yaml";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"container --name c1 --threads -1", "cairn: container: --threads expects an integer in [1, 64], got '-1'"},
+      {"container --name c1 --threads 100000", "cairn: container: --threads expects an integer in [1, 64], got '100000'"},
+      {"container --name c1 --threads 0", "cairn: container: --threads expects an integer in [1, 64], got '0'"},
+      {"container --name c1 --threads abc", "cairn: container: --threads expects an integer in [1, 64], got 'abc'"},
+      {"container --name c1 --load-timeout nan", "cairn: container: --load-timeout expects a number in [0.1, 3600], got 'nan'"},
+      {"container --name c1 --bogus", "cairn: container: unknown argument '--bogus'"},
+      {"launch " + spec + " --duration -1", "cairn: launch: --duration expects a number in [0, 1e+09], got '-1'"},
+      {"launch " + spec + " --duration nan", "cairn: launch: --duration expects a number in [0, 1e+09], got 'nan'"},
+      {"launch " + spec + " --duration 1e300", "cairn: launch: --duration expects a number in [0, 1e+09], got '1e300'"},
+      {"launch " + spec + " --duration abc", "cairn: launch: --duration expects a number in [0, 1e+09], got 'abc'"},
+      {"topic echo /chatter --count -1", "cairn: topic: --count expects an integer in [1, 1e+12], got '-1'"},
+      {"topic echo /chatter --count 1e99", "cairn: topic: --count expects an integer in [1, 1e+12], got '1e99'"},
+      {"topic echo /chatter --wait nan", "cairn: topic: --wait expects a number in [0, 3600], got 'nan'"},
+      {"topic hz /chatter --duration nan", "cairn: topic: --duration expects a number in [0, 1e+09], got 'nan'"},
+      {"topic hz /chatter --duration -1", "cairn: topic: --duration expects a number in [0, 1e+09], got '-1'"},
+      {"topic list --wait -1", "cairn: topic: --wait expects a number in [0, 3600], got '-1'"},
+      {"topic echo /chatter extra", "cairn: topic: unexpected argument 'extra' (topic echo <topic>) (see cairn --help)"},
+      {"param set /talker rate_hz 20 extra",
+       "cairn: param: unexpected argument 'extra' (param set <node> <name> <value>; quote a value with spaces) (see "
+       "cairn --help)"},
+      {"param get /talker rate_hz --timeout 5x", "cairn: param: --timeout expects a number in [0, 3600], got '5x'"},
+      {"param get /talker rate_hz --wait 0.5",
+       "cairn: param: param has no discovery step: --timeout S bounds the wait for the reply (see cairn --help)"},
+      {"component unload /c 5x", "cairn: component: id expects an integer in [0, 9e+15], got '5x'"},
+  };
+  for (const auto& [args, err] : cases) {
+    const auto r = run(kCairn + " " + args);
+    EXPECT_EQ(r.exit_code, 2) << args << ": " << r.output;
+    EXPECT_EQ(r.output, err + "\n") << args;
+  }
 }

@@ -117,6 +117,11 @@ TEST(LaunchSpec, QosThatNeverMatches) {
 TEST(LaunchSpec, BadValuesOfKnownKeys) {
   EXPECT_EQ(error_of("containers:\n  - name: c\n    threads: many\n"),
             "spec.yaml:3: container.threads: expected a number, got 'many'");
+  // NaN compared false against the range and was taken (threads = a NaN cast to size_t); trailing garbage too
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    threads: nan\n"),
+            "spec.yaml:3: container.threads: expected a number, got 'nan'");
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    threads: 2 3\n"),
+            "spec.yaml:3: container.threads: expected a number, got '2 3'");
   EXPECT_EQ(error_of("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
                      "        qos: {chatter: {reliability: sometimes}}\n"),
             "spec.yaml:5: qos.chatter: qos reliability expects reliable or best_effort, got 'sometimes'");

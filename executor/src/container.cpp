@@ -6,6 +6,7 @@
 #include <future>
 #include <iostream>
 
+#include "cairn/launch.hpp"
 #include "cairn/parameter_msgs.hpp"
 #include "composition_interfaces/srv/ListNodes.hpp"
 #include "composition_interfaces/srv/LoadNode.hpp"
@@ -241,26 +242,31 @@ int run_container_main(int argc, char** argv) {
   std::string name;
   std::size_t threads = 1;
   double load_timeout = 10.0;
-  for (int i = 0; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&](const char* what) -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(std::string("missing value after ") + what);
-      return argv[++i];
-    };
-    if (a == "--name") {
-      name = value("--name");
-    } else if (a == "--threads") {
-      threads = std::stoul(value("--threads"));
-    } else if (a == "--load-timeout") {
-      load_timeout = std::stod(value("--load-timeout"));
-    } else if (a == "-h" || a == "--help") {
-      std::cout << "usage: cairn container --name NAME [--threads N] [--load-timeout SECONDS]\n";
-      return 0;
-    } else {
-      throw std::invalid_argument("unknown argument '" + a + "'");
+  try {
+    for (int i = 0; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto value = [&](const char* what) -> std::string {
+        if (i + 1 >= argc) throw OptionError(std::string("missing value after ") + what);
+        return argv[++i];
+      };
+      if (a == "--name") {
+        name = value("--name");
+      } else if (a == "--threads") {  // the range of a launch spec's container.threads
+        threads = static_cast<std::size_t>(option_number("--threads", value("--threads"), 1, 64, true));
+      } else if (a == "--load-timeout") {  // the range of a launch spec's load_timeout
+        load_timeout = option_number("--load-timeout", value("--load-timeout"), 0.1, 3600);
+      } else if (a == "-h" || a == "--help") {
+        std::cout << "usage: cairn container --name NAME [--threads 1..64] [--load-timeout 0.1..3600 s]\n";
+        return 0;
+      } else {
+        throw OptionError("unknown argument '" + a + "'");
+      }
     }
+    if (name.empty()) throw OptionError("--name is required");
+  } catch (const OptionError& e) {
+    std::cerr << "cairn: container: " << e.what() << "\n";
+    return 2;
   }
-  if (name.empty()) throw std::invalid_argument("--name is required");
   Executor::install_signal_handlers();
   auto ctx = Context::default_context();
   Executor exec(Executor::Options{threads});

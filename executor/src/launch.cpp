@@ -5,7 +5,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <charconv>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -58,17 +60,10 @@ class SpecParser {
 
   double number(const YAML::Node& n, const std::string& key, double lo, double hi) const {
     if (!n.IsScalar()) fail(n, key + ": expected a number");
-    try {
-      std::size_t pos = 0;
-      const double v = std::stod(n.Scalar(), &pos);
-      if (pos != n.Scalar().size()) throw std::invalid_argument("trailing");
-      if (v < lo || v > hi) fail(n, key + ": " + n.Scalar() + " is outside [" + fmt(lo) + ", " + fmt(hi) + "]");
-      return v;
-    } catch (const LaunchError&) {
-      throw;
-    } catch (...) {
-      fail(n, key + ": expected a number, got '" + n.Scalar() + "'");
-    }
+    const auto v = parse_number(n.Scalar());
+    if (!v) fail(n, key + ": expected a number, got '" + n.Scalar() + "'");
+    if (*v < lo || *v > hi) fail(n, key + ": " + n.Scalar() + " is outside [" + fmt(lo) + ", " + fmt(hi) + "]");
+    return *v;
   }
 
   static std::string fmt(double v) {
@@ -244,6 +239,30 @@ double RespawnPolicy::delay_for(int consecutive) const {
   return std::min(d, std::max(delay_s, 30.0));
 }
 
+std::optional<double> parse_number(const std::string& text) {
+  const char* b = text.data();
+  const char* e = b + text.size();
+  if (b != e && *b == '+') ++b;  // as YAML and strtod allow
+  double v = 0;
+  const auto [end, ec] = std::from_chars(b, e, v);
+  if (b == e || ec != std::errc() || end != e || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+double option_number(const std::string& option, const std::string& text, double lo, double hi, bool integer) {
+  const auto v = parse_number(text);
+  if (!v || *v < lo || *v > hi || (integer && *v != std::floor(*v))) {
+    auto g = [](double x) {
+      std::ostringstream o;
+      o << x;
+      return o.str();
+    };
+    throw OptionError(option + " expects " + (integer ? "an integer" : "a number") + " in [" + g(lo) + ", " + g(hi) +
+                      "], got '" + text + "'");
+  }
+  return *v;
+}
+
 LaunchSpec parse_launch_spec_text(const std::string& text, const std::string& file) {
   YAML::Node root;
   try {
@@ -415,14 +434,24 @@ int run_launch_main(int argc, char** argv) {
   bool check_only = false;
   for (int i = 0; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--duration" && i + 1 < argc) {
-      duration = std::stod(argv[++i]);
+    if (a == "--duration") {
+      if (i + 1 >= argc) {
+        std::cerr << "cairn: launch: missing value after --duration\n";
+        return 2;
+      }
+      try {
+        duration = option_number("--duration", argv[++i], 0, 1e9);  // 0: until SIGINT/SIGTERM
+      } catch (const OptionError& e) {
+        std::cerr << "cairn: launch: " << e.what() << "\n";
+        return 2;
+      }
     } else if (a == "--check") {
       check_only = true;
     } else if (a == "-h" || a == "--help") {
       std::cout << "usage: cairn launch <spec.yaml> [--duration SECONDS] [--check]\n"
                    "  validates the whole spec (classes, parameters, topic types, QoS) before starting anything;\n"
-                   "  --check stops after validation, --duration stops the launch after SECONDS.\n";
+                   "  --check stops after validation, --duration stops the launch after SECONDS (at most 1e9;\n"
+                   "  0, the default, runs until SIGINT/SIGTERM).\n";
       return 0;
     } else if (path.empty() && a[0] != '-') {
       path = a;

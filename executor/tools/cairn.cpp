@@ -46,12 +46,12 @@ Runtime (graph discovered through DDS built-in topics; non-cairn DDS participant
   component types                      component classes that can be loaded
   component load <container> <class> [--name N] [--namespace NS] [-p name:=value]... [-r from:=to]...
   component unload <container> <id>
-  param get <node> <name>
-  param set <node> <name> <value>      value as YAML (3, 2.5, true, text, [1, 2])
+  param get <node> <name> [--timeout S]
+  param set <node> <name> <value>      value as YAML (3, 2.5, true, text, [1, 2]); quote a value with spaces
   param dump <node>                    all parameters as YAML
   launch <spec.yaml> [--duration S] [--check]
                                        validate the whole spec, then start and supervise it
-  container --name N [--threads K]     a component container process
+  container --name N [--threads K]     a component container process (K in 1-64, as in launch specs)
   bench ipc [--quick]                  intra-process and DDS latency/throughput vs baselines (JSON lines)
 
 Component tools (run as cairn-<verb>):
@@ -68,8 +68,10 @@ Component tools (run as cairn-<verb>):
   copa ...                             CoPA-Map people-activity model (components/copa_map)
   bt run <file.xml> ...                behavior trees (components/bt_executive)
 
-Common options: --wait S (discovery time, default 1.5 s). Environment: CAIRN_DOMAIN_ID / ROS_DOMAIN_ID,
-CYCLONEDDS_URI, CAIRN_COMPONENT_PATH, CAIRN_LOG_LEVEL.
+Common options: --wait S (topic, node, component: discovery time, 0-3600 s, default 1.5 s; topic echo/hz: time
+to find a publisher, default 5 s), --timeout S (param, component: time for the service reply, 0-3600 s, default
+5 s / 15 s). --count is 1-1e12 (default: until Ctrl-C); --duration 0-1e9 s (0, the default: until Ctrl-C).
+Environment: CAIRN_DOMAIN_ID / ROS_DOMAIN_ID, CYCLONEDDS_URI, CAIRN_COMPONENT_PATH, CAIRN_LOG_LEVEL.
 )";
 
 struct UsageError : std::runtime_error {
@@ -86,16 +88,19 @@ struct Args {
     if (it == opt.end() || it->second.empty()) return std::nullopt;
     return it->second.back();
   }
-  double num(const std::string& k, double def) const {
+  /// Option `k` as a number in [lo, hi] (see cairn::option_number), or `def` when it is not given.
+  double num(const std::string& k, double def, double lo, double hi, bool integer = false) const {
     auto v = get(k);
-    if (!v) return def;
-    try {
-      return std::stod(*v);
-    } catch (...) {
-      throw UsageError(k + " expects a number, got '" + *v + "'");
-    }
+    return v ? cairn::option_number(k, *v, lo, hi, integer) : def;
+  }
+  /// Rejects positional arguments beyond the first `n` (a value with spaces must be quoted).
+  void at_most(std::size_t n, const std::string& usage) const {
+    if (pos.size() > n) throw UsageError("unexpected argument '" + pos[n] + "' (" + usage + ")");
   }
 };
+
+// Ranges of the options common to several commands (seconds).
+constexpr double kMaxWait = 3600, kMaxDuration = 1e9;
 
 Args parse_args(int argc, char** argv, int first, const std::set<std::string>& with_value,
                 const std::set<std::string>& flags) {
@@ -118,7 +123,9 @@ Args parse_args(int argc, char** argv, int first, const std::set<std::string>& w
 
 std::string norm_topic(std::string t) { return t.empty() || t[0] == '/' ? t : "/" + t; }
 
-std::chrono::milliseconds wait_of(const Args& a) { return std::chrono::milliseconds(int64_t(a.num("--wait", 1.5) * 1000)); }
+std::chrono::milliseconds wait_of(const Args& a, double def = 1.5) {
+  return std::chrono::milliseconds(int64_t(a.num("--wait", def, 0, kMaxWait) * 1000));
+}
 
 struct Cli {
   std::shared_ptr<cairn::Context> ctx = cairn::Context::default_context();
@@ -139,6 +146,8 @@ std::vector<cairn::GraphEndpoint> discover(Cli& cli, std::chrono::milliseconds w
 
 // ---------------- topic ----------------
 int topic_list(const Args& a) {
+  a.at_most(0, "topic list");
+  wait_of(a);
   Cli cli;
   std::set<std::pair<std::string, std::string>> rows;
   for (const auto& e : discover(cli, wait_of(a))) {
@@ -166,7 +175,7 @@ std::optional<cairn::GraphEndpoint> find_publisher(Cli& cli, const std::string& 
 
 const cairn::msgs::TypeSupport& type_of_topic(Cli& cli, const std::string& topic, const Args& a,
                                               cairn::QoS* qos_out) {
-  auto pub = find_publisher(cli, topic, std::chrono::milliseconds(int64_t(a.num("--wait", 5.0) * 1000)));
+  auto pub = find_publisher(cli, topic, wait_of(a, 5.0));
   if (!pub) throw std::runtime_error("no publisher of " + topic + " found (is the topic name right? see cairn topic list)");
   const auto* ts = cairn::msgs::find_type_support(pub->dds_type);
   if (!ts) throw std::runtime_error(topic + " carries " + pub->dds_type + ", a type cairn does not know");
@@ -182,11 +191,13 @@ const cairn::msgs::TypeSupport& type_of_topic(Cli& cli, const std::string& topic
 
 int topic_echo(const Args& a) {
   if (a.pos.empty()) throw UsageError("topic echo <topic>");
+  a.at_most(1, "topic echo <topic>");
   const std::string topic = norm_topic(a.pos[0]);
+  const long count = a.has("--once") ? 1 : static_cast<long>(a.num("--count", 0, 1, 1e12, true));  // 0: until Ctrl-C
+  wait_of(a);  // a bad --wait is an error before anything starts
   Cli cli;
   cairn::QoS qos;
   const auto& ts = type_of_topic(cli, topic, a, &qos);
-  const long count = a.has("--once") ? 1 : static_cast<long>(a.num("--count", 0));
   std::atomic<long> printed{0};
   std::mutex mu;
   std::condition_variable cv;
@@ -211,11 +222,13 @@ int topic_echo(const Args& a) {
 
 int topic_hz(const Args& a) {
   if (a.pos.empty()) throw UsageError("topic hz <topic>");
+  a.at_most(1, "topic hz <topic>");
   const std::string topic = norm_topic(a.pos[0]);
+  const double duration = a.num("--duration", 0, 0, kMaxDuration);  // 0: until Ctrl-C
+  wait_of(a);
   Cli cli;
   cairn::QoS qos;
   const auto& ts = type_of_topic(cli, topic, a, &qos);
-  const double duration = a.num("--duration", 0);
   std::mutex mu;
   std::vector<double> stamps;
   auto reader = std::make_unique<cairn::DdsReader>(*cli.ctx, cairn::dds_topic_name(topic), ts, qos,
@@ -255,6 +268,7 @@ int topic_hz(const Args& a) {
 
 int topic_info(const Args& a) {
   if (a.pos.empty()) throw UsageError("topic info <topic>");
+  a.at_most(1, "topic info <topic>");
   const std::string topic = norm_topic(a.pos[0]);
   Cli cli;
   std::vector<cairn::GraphEndpoint> pubs, subs;
@@ -283,6 +297,8 @@ int topic_info(const Args& a) {
 
 // ---------------- node ----------------
 int node_list(const Args& a) {
+  a.at_most(0, "node list");
+  wait_of(a);
   Cli cli;
   cairn::GraphView g(*cli.ctx);
   g.wait_for_discovery(300ms, wait_of(a));
@@ -322,8 +338,12 @@ int component_main(int argc, char** argv) {
     return 0;
   }
   const Args a = parse_args(argc, argv, 3, {"--name", "--namespace", "-p", "-r", "--timeout", "--wait"}, {});
+  const auto timeout = std::chrono::milliseconds(int64_t(a.num("--timeout", 15, 0, kMaxWait) * 1000));
+  wait_of(a);
+  if (sub == "list") a.at_most(1, "component list [container]");
+  if (sub == "load") a.at_most(2, "component load <container> <class> [options]");
+  if (sub == "unload") a.at_most(2, "component unload <container> <id>");
   Cli cli;
-  const auto timeout = std::chrono::milliseconds(int64_t(a.num("--timeout", 15) * 1000));
   if (sub == "list") {
     std::vector<std::string> containers;
     if (!a.pos.empty()) {
@@ -386,11 +406,7 @@ int component_main(int argc, char** argv) {
   if (sub == "unload") {
     if (a.pos.size() < 2) throw UsageError("component unload <container> <id>");
     UnloadNode_Request req;
-    try {
-      req.unique_id = std::stoull(a.pos[1]);
-    } catch (...) {
-      throw UsageError("component unload: id must be a number, got '" + a.pos[1] + "'");
-    }
+    req.unique_id = static_cast<uint64_t>(cairn::option_number("id", a.pos[1], 0, 9e15, true));
     auto client = cli.node->create_client<UnloadNode_Request, UnloadNode_Response>(container_service(a.pos[0], "unload_node"));
     auto resp = client->call(req, timeout);
     if (!resp) throw std::runtime_error("container " + norm_topic(a.pos[0]) + " did not answer unload_node");
@@ -405,9 +421,13 @@ int component_main(int argc, char** argv) {
 int param_main(int argc, char** argv) {
   if (argc < 4) throw UsageError("param get|set|dump <node> ...");
   const std::string sub = argv[2];
-  const Args a = parse_args(argc, argv, 4, {"--timeout"}, {});
+  const Args a = parse_args(argc, argv, 4, {"--timeout", "--wait"}, {});
+  if (a.get("--wait")) throw UsageError("param has no discovery step: --timeout S bounds the wait for the reply");
   const std::string node = norm_topic(argv[3]);
-  const auto timeout = std::chrono::milliseconds(int64_t(a.num("--timeout", 5) * 1000));
+  const auto timeout = std::chrono::milliseconds(int64_t(a.num("--timeout", 5, 0, kMaxWait) * 1000));
+  if (sub == "get") a.at_most(1, "param get <node> <name>");
+  if (sub == "set") a.at_most(2, "param set <node> <name> <value>; quote a value with spaces");
+  if (sub == "dump") a.at_most(0, "param dump <node>");
   Cli cli;
   using namespace rcl_interfaces::srv;
   auto get = [&](const std::vector<std::string>& names) {
@@ -504,6 +524,9 @@ int main(int argc, char** argv) {
     if (verb == "container") return cairn::run_container_main(argc - 2, argv + 2);
   } catch (const UsageError& e) {
     std::cerr << "cairn: " << verb << ": " << e.what() << " (see cairn --help)\n";
+    return 2;
+  } catch (const cairn::OptionError& e) {
+    std::cerr << "cairn: " << verb << ": " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "cairn: " << verb << ": " << e.what() << "\n";

@@ -85,6 +85,18 @@ void validate_launch_spec(const LaunchSpec& spec, ComponentLoader& loader);
 /// one-line error "file:line: ..." of the first problem, or "" when the spec is valid.
 std::string launch_spec_error(const std::string& text, const std::string& file);
 
+/// Strict number (launch spec values and command-line options): the whole text is a finite decimal number;
+/// otherwise std::nullopt ("5 6", "abc", "nan", "inf", "" are not numbers).
+std::optional<double> parse_number(const std::string& text);
+/// Bad command-line input ("cairn: <verb>: <what>", exit 2).
+class OptionError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+/// The value of a numeric command-line option: a strict number in [lo, hi], and integral if `integer`;
+/// otherwise throws OptionError("<option> expects a number in [lo, hi], got '<text>'").
+double option_number(const std::string& option, const std::string& text, double lo, double hi, bool integer = false);
+
 /// `cairn launch <spec> [--duration S] [--check]`: validate, start containers (child processes), load
 /// components, supervise (respawn crashed containers and reload their components), stop on SIGINT/SIGTERM.
 int run_launch_main(int argc, char** argv);
