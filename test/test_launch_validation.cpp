@@ -163,6 +163,9 @@ TEST(LaunchSpec, ParameterFiles) {
     std::ofstream(dir + "/good.yaml") << "/talker:\n  ros__parameters:\n    rate_hz: 3.5\n    text: from file\n";
     std::ofstream(dir + "/bad.yaml") << "/talker:\n  ros__parameters:\n    rate_hz: [1, {x: 2}]\n";
     std::ofstream(dir + "/broken.yaml") << "/talker: [\n";
+    std::ofstream(dir + "/flat.yaml") << "rate_hz: abc\n";
+    std::ofstream(dir + "/other.yaml") << "/other:\n  ros__parameters:\n    rate_hz: 1.0\n";
+    std::ofstream(dir + "/shared.yaml") << "/other:\n  ros__parameters: {x: 1}\n/**:\n  ros__parameters: {text: all}\n";
   }
   cairn::ComponentLoader loader;
   auto spec = cairn::parse_launch_spec_text(
@@ -185,4 +188,13 @@ TEST(LaunchSpec, ParameterFiles) {
   EXPECT_EQ(err("bad.yaml"), dir + "/bad.yaml:3: /talker.ros__parameters.rate_hz: parameter arrays hold scalars only");
   EXPECT_EQ(err("broken.yaml").rfind(dir + "/broken.yaml:", 0), 0u) << err("broken.yaml");
   EXPECT_EQ(err("missing.yaml"), dir + "/spec.yaml:5: component.params_file: cannot read '" + dir + "/missing.yaml'");
+  // a directory is an unreadable file, not a raw stream exception
+  EXPECT_EQ(err(dir), dir + "/spec.yaml:5: component.params_file: cannot read '" + dir + "' (a directory)");
+  // a file that holds nothing for the component would silently not apply
+  EXPECT_EQ(err("flat.yaml"), dir + "/spec.yaml:5: component.params_file: '" + dir +
+                                  "/flat.yaml' has no entry for /talker (its keys: rate_hz; expected /talker, talker or "
+                                  "/** mapping to {ros__parameters: {...}})");
+  EXPECT_NE(err("other.yaml").find("other.yaml' has no entry for /talker (its keys: /other;"), std::string::npos)
+      << err("other.yaml");
+  EXPECT_EQ(err("shared.yaml"), "") << "/** applies to every node";
 }

@@ -189,19 +189,30 @@ class SpecParser {
     namespace fs = std::filesystem;
     fs::path path = rel;
     if (path.is_relative()) path = fs::path(file_).parent_path() / path;
+    std::error_code ec;
     std::ifstream in(path);
-    if (!in) throw LaunchError(file_, c.params_line, "component.params_file: cannot read '" + path.string() + "'");
+    if (fs::is_directory(path, ec) || !in)
+      throw LaunchError(file_, c.params_line, "component.params_file: cannot read '" + path.string() + "'" +
+                                                  (fs::is_directory(path, ec) ? " (a directory)" : ""));
     YAML::Node root;
     const std::string pfile = path.string();
     try {
-      root = YAML::Load(in);
+      std::stringstream text;
+      text << in.rdbuf();
+      root = YAML::Load(text.str());
     } catch (const YAML::Exception& e) {
       throw LaunchError(pfile, e.mark.line >= 0 ? e.mark.line + 1 : 0, "YAML syntax error: " + e.msg);
     }
     if (!root.IsMap()) throw LaunchError(pfile, line_of(root), "a parameter file maps node names to {ros__parameters: {...}}");
+    // A file given for a component but holding nothing for it is a mistake (a flat {name: value} file, or
+    // another node's name): its parameters would silently not apply.
+    std::string keys;
+    bool matched = false;
     for (const auto& kv : root) {
       const std::string node = kv.first.as<std::string>();
+      keys += (keys.empty() ? "" : ", ") + node;
       if (node != c.fqn() && node != c.name && node != "/**" && node != "**" && node != "*") continue;
+      matched = true;
       const auto rp = kv.second["ros__parameters"];
       if (!rp || !rp.IsMap()) throw LaunchError(pfile, line_of(kv.second), node + ": expected ros__parameters: {name: value}");
       for (const auto& p : rp) {
@@ -214,6 +225,10 @@ class SpecParser {
         }
       }
     }
+    if (!matched)
+      throw LaunchError(file_, c.params_line,
+                        "component.params_file: '" + pfile + "' has no entry for " + c.fqn() + " (its keys: " + keys +
+                            "; expected " + c.fqn() + ", " + c.name + " or /** mapping to {ros__parameters: {...}})");
   }
 
   static bool valid_name(const std::string& s) {
