@@ -90,6 +90,10 @@ TEST(Cli, CommandsAgainstARunningContainer) {
   r = run(kCairn + " component load /demo_container cairn_demo::Nope");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("unknown component class 'cairn_demo::Nope'"), std::string::npos) << r.output;
+  r = run(kCairn + " component load /demo_container cairn_demo::Talker --name t3 -p bogus:=1");
+  EXPECT_EQ(r.exit_code, 1);  // refused like an unknown parameter in a launch spec
+  EXPECT_NE(r.output.find("params.bogus: cairn_demo::Talker (/t3) has no such parameter"), std::string::npos) << r.output;
+  EXPECT_EQ(count(r.output, "\n"), 1) << r.output;
   r = run(kCairn + " component list");
   EXPECT_NE(r.output.find("/demo_container\n  1  /talker\n  2  /listener\n"), std::string::npos) << r.output;
 

@@ -136,6 +136,25 @@ TEST(Container, DuplicateNodeNamesAreRefused) {
   EXPECT_NE(r.error.find("already loaded"), std::string::npos) << r.error;
 }
 
+// Like launch validation, a load with a parameter the component does not declare is refused (it used to load,
+// the parameter silently ignored); the container keeps serving.
+TEST(Container, UnknownParametersAreRefused) {
+  auto ctx = cairn::Context::create();
+  cairn::Executor exec;
+  cairn::ComponentLoader loader;
+  cairn::ComponentManager mgr(ctx, exec, "c5", loader);
+  cairn::LoadRequest bad{"cairn_demo::Talker", "t3"};
+  bad.parameters["bogus"] = int64_t{1};
+  const auto r = mgr.load(bad);
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.error.rfind("params.bogus: cairn_demo::Talker (/t3) has no such parameter (declared: ", 0), 0u) << r.error;
+  EXPECT_TRUE(mgr.list().empty());
+  cairn::LoadRequest good{"cairn_demo::Talker", "t3"};
+  good.parameters["rate_hz"] = 5.0;
+  const auto ok = mgr.load(good);
+  EXPECT_TRUE(ok.ok) << ok.error;
+}
+
 // A restart with restore_parameters brings a component back with what it was first loaded with (the bt executive's
 // RestartComponent relies on it), over the load_node service; the container's `pid` parameter names its process.
 TEST(Container, RestartRestoresTheOriginalLaunchParameters) {

@@ -36,7 +36,22 @@ std::string default_node_name(const std::string& class_name) {
   return out;
 }
 
+std::optional<std::string> unknown_parameter_error(const Context& dry, const std::string& class_name,
+                                                   const std::string& fqn) {
+  for (const auto& u : dry.unused_parameters()) {
+    std::string declared;
+    for (const auto& d : u.declared) declared += (declared.empty() ? "" : ", ") + d;
+    return "params." + u.names.front() + ": " + class_name + " (" + fqn + ") has no such parameter (declared: " +
+           declared + ")";
+  }
+  return std::nullopt;
+}
+
 namespace {
+struct UnknownParameter : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
 LoadRequest from_msg(const LoadNode_Request& r) {
   LoadRequest out;
   out.class_name = r.plugin_name;
@@ -167,8 +182,17 @@ LoadResult ComponentManager::load(const LoadRequest& given) {
   // instead of blocking the container forever.
   auto state = std::make_shared<std::promise<std::shared_ptr<void>>>();
   auto fut = state->get_future();
-  std::thread([state, factory, no] {
+  std::thread([state, factory, no, class_name = req.class_name, fqn] {
     try {
+      if (!no.parameter_overrides.empty()) {
+        // Parameters the component does not declare are refused, as by launch validation: a dry run first
+        // (no DDS), which also finds them in components that never read them.
+        NodeOptions dry = no;
+        dry.executor = nullptr;
+        dry.context = Context::create(ContextOptions{-1, true});
+        (*factory)(dry).reset();
+        if (auto err = unknown_parameter_error(*dry.context, class_name, fqn)) throw UnknownParameter(*err);
+      }
       state->set_value((*factory)(no));
     } catch (...) {
       state->set_exception(std::current_exception());
@@ -183,6 +207,10 @@ LoadResult ComponentManager::load(const LoadRequest& given) {
   std::shared_ptr<void> obj;
   try {
     obj = fut.get();
+  } catch (const UnknownParameter& e) {
+    res.error = e.what();
+    CAIRN_ERROR(node_->logger(), "load " << fqn << ": " << res.error);
+    return res;
   } catch (const std::exception& e) {
     res.error = "component " + req.class_name + " (" + fqn + ") failed to construct: " + e.what();
     CAIRN_ERROR(node_->logger(), res.error);

@@ -343,13 +343,8 @@ void validate_launch_spec(const LaunchSpec& spec, ComponentLoader& loader) {
         throw LaunchError(spec.file, c.line, c.class_name + " (" + c.fqn() + ") cannot be constructed: " + e.what());
       }
       obj.reset();  // the node reports parameters nobody declared as it goes
-      for (const auto& u : ctx->unused_parameters()) {
-        std::string declared;
-        for (const auto& d : u.declared) declared += (declared.empty() ? "" : ", ") + d;
-        throw LaunchError(spec.file, c.params_line ? c.params_line : c.line,
-                          "params." + u.names.front() + ": " + c.class_name + " (" + c.fqn() +
-                              ") has no such parameter (declared: " + declared + ")");
-      }
+      if (auto err = unknown_parameter_error(*ctx, c.class_name, c.fqn()))
+        throw LaunchError(spec.file, c.params_line ? c.params_line : c.line, *err);
       for (const auto& r : ctx->records()) {
         if (r.kind == EndpointRecord::Kind::Publisher || r.kind == EndpointRecord::Kind::Subscription) {
           topics[r.topic].push_back(End{r, &c});

@@ -90,6 +90,12 @@ class ComponentManager {
 /// "Talker" / "cairn_demo::Talker" / "ScanMatcherNode" -> "talker" / "talker" / "scan_matcher_node"
 std::string default_node_name(const std::string& class_name);
 
+/// After a component was constructed and destroyed in the dry-run context `dry`: the one-line error for the
+/// first parameter it was given but never declared, "params.<name>: <class> (<fqn>) has no such parameter
+/// (declared: a, b)", or nullopt. Launch validation and the container's load_node both refuse such loads.
+std::optional<std::string> unknown_parameter_error(const Context& dry, const std::string& class_name,
+                                                   const std::string& fqn);
+
 /// Runs `cairn container --name N [--threads K] [--load-timeout S]` until SIGINT/SIGTERM. Returns the exit code.
 int run_container_main(int argc, char** argv);
 
