@@ -116,12 +116,16 @@ TEST(LaunchSpec, QosThatNeverMatches) {
 
 TEST(LaunchSpec, BadValuesOfKnownKeys) {
   EXPECT_EQ(error_of("containers:\n  - name: c\n    threads: many\n"),
-            "spec.yaml:3: container.threads: expected a number, got 'many'");
+            "spec.yaml:3: container.threads: expected an integer, got 'many'");
   // NaN compared false against the range and was taken (threads = a NaN cast to size_t); trailing garbage too
   EXPECT_EQ(error_of("containers:\n  - name: c\n    threads: nan\n"),
-            "spec.yaml:3: container.threads: expected a number, got 'nan'");
+            "spec.yaml:3: container.threads: expected an integer, got 'nan'");
   EXPECT_EQ(error_of("containers:\n  - name: c\n    threads: 2 3\n"),
-            "spec.yaml:3: container.threads: expected a number, got '2 3'");
+            "spec.yaml:3: container.threads: expected an integer, got '2 3'");
+  // 2.5 threads and domain 7.5 were truncated silently
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    threads: 2.5\n"),
+            "spec.yaml:3: container.threads: expected an integer, got '2.5'");
+  EXPECT_EQ(error_of("domain_id: 7.5\ncontainers:\n  - name: c\n"), "spec.yaml:1: domain_id: expected an integer, got '7.5'");
   EXPECT_EQ(error_of("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
                      "        qos: {chatter: {reliability: sometimes}}\n"),
             "spec.yaml:5: qos.chatter: qos reliability expects reliable or best_effort, got 'sometimes'");

@@ -58,10 +58,11 @@ class SpecParser {
     return b;
   }
 
-  double number(const YAML::Node& n, const std::string& key, double lo, double hi) const {
-    if (!n.IsScalar()) fail(n, key + ": expected a number");
+  double number(const YAML::Node& n, const std::string& key, double lo, double hi, bool integer = false) const {
+    if (!n.IsScalar()) fail(n, key + ": expected " + (integer ? "an integer" : "a number"));
     const auto v = parse_number(n.Scalar());
-    if (!v) fail(n, key + ": expected a number, got '" + n.Scalar() + "'");
+    if (!v || (integer && *v != std::floor(*v)))
+      fail(n, key + ": expected " + (integer ? "an integer" : "a number") + ", got '" + n.Scalar() + "'");
     if (*v < lo || *v > hi) fail(n, key + ": " + n.Scalar() + " is outside [" + fmt(lo) + ", " + fmt(hi) + "]");
     return *v;
   }
@@ -77,7 +78,7 @@ class SpecParser {
     spec.file = file_;
     if (!root.IsMap()) fail(root, "a launch spec is a map with 'containers' and/or 'processes'");
     allow_keys(root, "spec", {"domain_id", "load_timeout", "containers", "processes"});
-    if (root["domain_id"]) spec.domain_id = static_cast<int>(number(root["domain_id"], "domain_id", 0, 232));
+    if (root["domain_id"]) spec.domain_id = static_cast<int>(number(root["domain_id"], "domain_id", 0, 232, true));
     if (root["load_timeout"]) spec.load_timeout_s = number(root["load_timeout"], "load_timeout", 0.1, 3600);
     std::set<std::string> names, fqns;
     if (const auto cs = root["containers"]) {
@@ -101,7 +102,7 @@ class SpecParser {
     c.name = str(n["name"], "container.name");
     if (!valid_name(c.name)) fail(n["name"], "container.name: '" + c.name + "' is not a valid node name");
     if (!names.insert(c.name).second) fail(n["name"], "container.name: duplicate name '" + c.name + "'");
-    if (n["threads"]) c.threads = static_cast<std::size_t>(number(n["threads"], "container.threads", 1, 64));
+    if (n["threads"]) c.threads = static_cast<std::size_t>(number(n["threads"], "container.threads", 1, 64, true));
     respawn(n, "container", c.respawn);
     if (const auto comps = n["components"]) {
       if (!comps.IsSequence()) fail(comps, "container.components: expected a list");
