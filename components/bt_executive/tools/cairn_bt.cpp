@@ -47,9 +47,9 @@ int usage() {
                "[--no-wait]\n"
                "       cairn bt replay <trace.log>\n"
                "       cairn bt watch <trace.log> [--follow] [--interval-ms N]\n"
-               "       cairn bt watch --topic [NAME=/bt/status] [--count N | --once] [--timeout S]\n"
+               "       cairn bt watch --topic [NAME=/bt/status] [--count N | --once] [--timeout S (0-86400, 0: forever)]\n"
                "       cairn bt model\n"
-               "       cairn bt psbt-eval [--starts N] [--seed S] [--n-pl N] [--hotspots K] [--xml FILE]\n");
+               "       cairn bt psbt-eval [--starts 1-100000] [--seed S] [--n-pl 1-10] [--hotspots 0-1000] [--xml FILE]\n");
   return 2;
 }
 
