@@ -177,6 +177,7 @@ TEST(Cli, BadOptionValuesAreOneLineErrorsBeforeAnythingStarts) {
       {"param get /talker rate_hz --timeout 5x", "cairn: param: --timeout expects a number in [0, 3600], got '5x'"},
       {"param get /talker rate_hz --wait 0.5",
        "cairn: param: param has no discovery step: --timeout S bounds the wait for the reply (see cairn --help)"},
+      {"component types extra", "cairn: component: unexpected argument 'extra' (component types) (see cairn --help)"},
       {"component unload /c 5x", "cairn: component: id expects an integer in [0, 9e+15], got '5x'"},
   };
   for (const auto& [args, err] : cases) {

@@ -333,6 +333,7 @@ int component_main(int argc, char** argv) {
   if (argc < 3) throw UsageError("component list|types|load|unload");
   const std::string sub = argv[2];
   if (sub == "types") {
+    if (argc > 3) throw UsageError("unexpected argument '" + std::string(argv[3]) + "' (component types)");
     cairn::ComponentLoader loader;
     for (const auto& [cls, lib] : loader.available()) std::cout << cls << "  (" << lib << ")\n";
     return 0;
