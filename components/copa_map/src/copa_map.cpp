@@ -56,6 +56,8 @@ CopaMap CopaMap::initialize(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, 
   if (!X.allFinite() || !y.allFinite()) throw std::invalid_argument("CoPA-Map: NaN or Inf in training data");
   if (durations.size() == X.rows() && (durations.array() < 0).any())
     throw std::invalid_argument("CoPA-Map: negative observation duration");
+  if (!(cfg.cell_size > 0) || !(cfg.time_bin > 0))
+    throw std::invalid_argument("CoPA-Map: cell_size and time_bin must be > 0");
   CopaMap cm;
   cm.cell_size_ = cfg.cell_size;
   cm.time_bin_ = cfg.time_bin;

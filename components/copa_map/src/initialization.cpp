@@ -119,6 +119,9 @@ Eigen::MatrixXd initializeInducing(const Eigen::MatrixXd& X, const Eigen::Vector
 PeriodInitResult initializePeriods(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
                                    const Eigen::VectorXd& counts, const PeriodInitConfig& cfg) {
   if (X.rows() == 0 || X.rows() != y.size()) throw std::invalid_argument("initializePeriods: empty or mismatched data");
+  if (!(cfg.period_step > 0) || !(cfg.period_min > 0) || !(cfg.cell_size > 0) || !(cfg.time_bin > 0))
+    throw std::invalid_argument(
+        "initializePeriods: period_step, period_min, cell_size and time_bin must be > 0");
   // Collapse the data onto the coarse initialization grid; one time series per spatial cell (mean rate per bin).
   struct Series {
     std::map<long long, std::pair<double, int>> bins;  // time bin -> (sum y, n)
@@ -154,8 +157,18 @@ PeriodInitResult initializePeriods(const Eigen::MatrixXd& X, const Eigen::Vector
 
   // Candidate periods o, equally spaced.
   const double pmax = cfg.period_max > 0 ? cfg.period_max : std::max(cfg.period_min, 0.5 * (tmax - tmin));
+  constexpr double kMaxCandidates = 1e6;
+  if (!((pmax - cfg.period_min) / cfg.period_step <= kMaxCandidates))
+    throw std::invalid_argument(
+        "initializePeriods: (period_max - period_min) / period_step gives more than 1e6 "
+        "candidate periods (raise period_step)");
   std::vector<double> periods;
-  for (double p = cfg.period_min; p <= pmax + 1e-9; p += cfg.period_step) periods.push_back(p);
+  // Indexed, not accumulated: p += step stops advancing when step is below p's rounding unit.
+  for (long i = 0;; ++i) {
+    const double p = cfg.period_min + static_cast<double>(i) * cfg.period_step;
+    if (!(p <= pmax + 1e-9)) break;
+    periods.push_back(p);
+  }
   if (periods.empty()) throw std::invalid_argument("initializePeriods: empty candidate period set");
 
   // Roulette-wheel selection of Λ series weighted by total counts (without replacement).

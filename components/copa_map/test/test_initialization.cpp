@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 #include "cairn/copa_map/initialization.hpp"
 
@@ -88,4 +89,21 @@ TEST(CopaInit, InducingPointsCountAndDurationWeighting) {
   const auto left = (Z.col(0).array() < 5.0).count();
   EXPECT_GE(left, 13);  // most inducing points where Δ is large
   EXPECT_THROW(initializeInducing(X, d, 0.0, 10, 1), std::invalid_argument);
+}
+
+TEST(CopaInit, BadCandidatePeriodStepsThrowInsteadOfLooping) {
+  Eigen::MatrixXd X(12, 3);
+  Eigen::VectorXd y(12);
+  for (int t = 0; t < 12; ++t) {
+    X.row(t) << 1.0, 1.0, t;
+    y[t] = 1.0 + t % 3;
+  }
+  PeriodInitConfig cfg;
+  cfg.period_step = 0.0;  // p += 0 never reached period_max
+  EXPECT_THROW(initializePeriods(X, y, Eigen::VectorXd(), cfg), std::invalid_argument);
+  cfg.period_step = 1e-9;  // 5e9 candidates
+  EXPECT_THROW(initializePeriods(X, y, Eigen::VectorXd(), cfg), std::invalid_argument);
+  cfg.period_min = 1e12;  // p + step == p in doubles: accumulation never advanced
+  cfg.period_step = 1e-6;
+  EXPECT_NO_THROW(initializePeriods(X, y, Eigen::VectorXd(), cfg));
 }
