@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <limits>
@@ -14,6 +15,15 @@ std::string trim(const std::string& s) {
   if (a == std::string::npos) return "";
   const auto b = s.find_last_not_of(" \t\r\n");
   return s.substr(a, b - a + 1);
+}
+
+std::ifstream openInputFile(const std::string& path, const std::string& what) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(path, 0, "cannot open " + what + ": is a directory");
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open " + what);
+  return in;
 }
 
 namespace {
@@ -43,8 +53,7 @@ int CsvTable::column(const std::string& name) const {
 }
 
 CsvTable readCsv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, 0, "cannot open file");
+  std::ifstream in = openInputFile(path, "file");
   CsvTable t;
   std::string line;
   long lineno = 0;
@@ -69,6 +78,7 @@ CsvTable readCsv(const std::string& path) {
       if (!std::isfinite(v)) throw InputError(path, lineno, "NaN or Inf in column " + t.header[c]);
       values.push_back(v);
     }
+    t.lines.push_back(lineno);
     ++rows;
   }
   t.data.resize(rows, static_cast<Eigen::Index>(nc));
@@ -89,11 +99,17 @@ GridData readGridCsv(const std::string& path, bool require_y) {
   g.X.col(0) = t.data.col(c1);
   g.X.col(1) = t.data.col(c2);
   g.X.col(2) = t.data.col(ct);
-  if (cy >= 0) g.y = t.data.col(cy);
+  if (cy >= 0) {
+    g.y = t.data.col(cy);
+    if (require_y)
+      for (Eigen::Index i = 0; i < g.y.size(); ++i)
+        if (g.y[i] < 0) throw InputError(path, t.lines[static_cast<std::size_t>(i)], "negative rate y");
+  }
   if (cd >= 0) {
     g.durations = t.data.col(cd);
     for (Eigen::Index i = 0; i < g.durations.size(); ++i)
-      if (g.durations[i] < 0) throw InputError(path, static_cast<long>(i) + 2, "negative duration");
+      if (g.durations[i] < 0)
+        throw InputError(path, t.lines[static_cast<std::size_t>(i)], "negative duration");
   }
   return g;
 }
@@ -156,9 +172,7 @@ namespace {
 
 class TokenReader {
  public:
-  TokenReader(const std::string& path) : path_(path), in_(path) {
-    if (!in_) throw InputError(path, 0, "cannot open model file");
-  }
+  TokenReader(const std::string& path) : path_(path), in_(openInputFile(path, "model file")) {}
   std::string word() {
     std::string w;
     while (true) {

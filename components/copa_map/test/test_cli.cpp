@@ -33,11 +33,9 @@ std::string slurp(const std::string& p) {
   return ss.str();
 }
 
-}  // namespace
-
-TEST(CopaCli, TrainPredictEval) {
-  const std::string dir = testing::TempDir();
-  // Small sub-area of the ATC test split: days 1-3 train, day 4 test.
+// Small sub-area of the ATC test split: days 1-3 train (cli_train.csv), day 4 test (cli_test.csv), points at
+// t = 40 (cli_pts.csv).
+void writeSubArea(const std::string& dir) {
   std::ifstream in(kAtc);
   std::ofstream tr(dir + "/cli_train.csv"), te(dir + "/cli_test.csv"), pts(dir + "/cli_pts.csv");
   std::string line;
@@ -52,9 +50,13 @@ TEST(CopaCli, TrainPredictEval) {
     (t < 36 ? tr : te) << line << "\n";
     if (t == 40) pts << line.substr(0, line.rfind(',')) << "\n";
   }
-  tr.close();
-  te.close();
-  pts.close();
+}
+
+}  // namespace
+
+TEST(CopaCli, TrainPredictEval) {
+  const std::string dir = testing::TempDir();
+  writeSubArea(dir);
   std::ofstream(dir + "/cli_cfg.txt") << "max_iterations = 20\nbatch_size = 300\nperiod_max = 24\n"
                                           "step_decay = invsqrt\ndecay_steps = 10\naverage_iterates = 1\n"
                                           "patience = 2\nelbo_floor = 1\n";
@@ -87,4 +89,106 @@ TEST(CopaCli, BadInputIsOneLineAndExitCode2) {
   std::ofstream(dir + "/cli_cfg_bad.txt") << "batch_size = 300\nstep_decay = cosine\n";
   EXPECT_EQ(run("train --train " + dir + "/cli_bad.csv --config " + dir + "/cli_cfg_bad.txt -o " + dir + "/x.txt", &err), 2);
   EXPECT_EQ(err, "cairn: " + dir + "/cli_cfg_bad.txt:2: step decay 'cosine': expected constant, invsqrt or plateau\n");
+}
+
+namespace {
+
+// Writes a config file whose line 2 is `line` (line 1 is a comment) and runs `train` with it.
+int trainWithConfigLine(const std::string& line, std::string* err) {
+  const std::string dir = testing::TempDir();
+  std::ofstream(dir + "/cli_range.txt") << "# range check\n" << line << "\n";
+  return run(
+      "train --train " + dir + "/cli_never_read.csv --config " + dir + "/cli_range.txt -o " + dir + "/x.txt",
+      err);
+}
+
+}  // namespace
+
+TEST(CopaCli, ZeroPeriodStepIsAnErrorNotAHang) {
+  const std::string dir = testing::TempDir();
+  std::string err;
+  EXPECT_EQ(trainWithConfigLine("period_step = 0", &err), 2);
+  EXPECT_EQ(err, "cairn: " + dir +
+                     "/cli_range.txt:2: value of 'period_step' must be in (0, 1000000000000], got '0'\n");
+}
+
+TEST(CopaCli, EveryConfigValueIsRangeCheckedWithFileAndLine) {
+  const std::string dir = testing::TempDir();
+  for (const std::string line :
+       {"max_iterations = -5", "batch_size = 0", "batch_size = -1", "batch_size = 2.5", "max_seconds = -1",
+        "patience = -1", "seed = -1", "hyper_every = 0", "decay_steps = 0", "cell_size = 0", "time_bin = -1",
+        "alpha_ind = 2", "train_hyper = 2", "natgrad_gamma = 0"}) {
+    std::string err;
+    EXPECT_EQ(trainWithConfigLine(line, &err), 2) << line;
+    const std::string key = line.substr(0, line.find(' '));
+    EXPECT_EQ(err.rfind("cairn: " + dir + "/cli_range.txt:2: value of '" + key + "' must be ", 0), 0u)
+        << line << ": " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  }
+  std::string err;
+  EXPECT_EQ(trainWithConfigLine("max_iterations = 5 6", &err), 2);
+  EXPECT_EQ(err, "cairn: " + dir + "/cli_range.txt:2: value of 'max_iterations' is not a number: '5 6'\n");
+  EXPECT_EQ(trainWithConfigLine("gh_order = 1000000", &err), 2);
+  EXPECT_EQ(err,
+            "cairn: " + dir + "/cli_range.txt:2: value of 'gh_order' must be in [1, 100], got '1000000'\n");
+}
+
+TEST(CopaCli, UnknownOptionsAndDirectoriesAreErrors) {
+  const std::string dir = testing::TempDir();
+  std::string err;
+  EXPECT_EQ(run("train --train a.csv -o m.txt --bogus 1", &err), 2);
+  EXPECT_EQ(err.rfind("cairn: copa: unknown option '--bogus'\n", 0), 0u) << err;
+  EXPECT_EQ(run("predict --model m.txt --points p.csv -o out.csv --bogus 1", &err), 2);
+  EXPECT_EQ(err.rfind("cairn: copa: unknown option '--bogus'\n", 0), 0u) << err;
+  EXPECT_EQ(run("predict --model m.txt --json --points p.csv -o out.csv", &err), 2);  // --json is eval's
+  EXPECT_EQ(err.rfind("cairn: copa: unknown option '--json'\n", 0), 0u) << err;
+  EXPECT_EQ(run("train --train a.csv --train b.csv -o m.txt", &err), 2);
+  EXPECT_EQ(err.rfind("cairn: copa: option '--train' given twice\n", 0), 0u) << err;
+  EXPECT_EQ(run("train --train a.csv -o m.txt --config " + dir, &err), 2);
+  EXPECT_EQ(err, "cairn: " + dir + ":0: cannot open config file: is a directory\n");
+  EXPECT_EQ(run("train --train " + dir + " -o m.txt", &err), 2);
+  EXPECT_EQ(err, "cairn: " + dir + ":0: cannot open file: is a directory\n");
+}
+
+TEST(CopaCli, NegativeRateInAGridCsvIsAnError) {
+  const std::string dir = testing::TempDir();
+  std::ofstream(dir + "/cli_neg.csv") << "x1,x2,t,y\n1,2,3,4\n\n1,2,4,-0.5\n";
+  std::string err;
+  EXPECT_EQ(run("train --train " + dir + "/cli_neg.csv -o " + dir + "/x.txt", &err), 2);
+  EXPECT_EQ(err, "cairn: " + dir + "/cli_neg.csv:4: negative rate y\n");
+}
+
+TEST(CopaCli, RenderChecksMapYamlTimesAndArea) {
+  const std::string dir = testing::TempDir();
+  writeSubArea(dir);
+  std::ofstream(dir + "/cli_render_cfg.txt") << "max_iterations = 1\nbatch_size = 300\nperiod_max = 24\n";
+  std::string err;
+  const std::string model = dir + "/cli_render_model.txt";
+  ASSERT_EQ(run("train --train " + dir + "/cli_train.csv --config " + dir + "/cli_render_cfg.txt -o " + model,
+                &err),
+            0)
+      << err;
+  const std::string png = std::string(CAIRN_SOURCE_ROOT) + "/test/data/people/atc_map.png";
+  auto render = [&](const std::string& yaml, const std::string& extra) {
+    std::ofstream(dir + "/cli_map.yaml") << yaml;
+    return run("render --model " + model + " --map " + dir + "/cli_map.yaml -o " + dir + "/cli_r " + extra,
+               &err);
+  };
+  const std::string small = "--times 40 --bbox 14,-12,16,-10";
+  // The flow form is valid YAML.
+  EXPECT_EQ(render("{image: " + png + ", resolution: 0.05, origin: [-60, -40, 0]}\n", small), 0) << err;
+  EXPECT_EQ(render("image: " + png + "\nresolution: 0.05\norigin: [-60, -40, 0\nnegate: 0\n", small), 2);
+  EXPECT_EQ(err.rfind("cairn: " + dir + "/cli_map.yaml:", 0), 0u) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_EQ(render("image: " + png + "\nresolution: 0.05\norigin: [-60, -40, 0]\n  negate: 0\n", small), 2);
+  EXPECT_EQ(err.rfind("cairn: " + dir + "/cli_map.yaml:", 0), 0u) << err;
+  EXPECT_EQ(render("image: " + png + "\nresolution: 0.05\norigin: [-60, -40, 0]\nnegatee: 0\n", small), 2);
+  EXPECT_EQ(err.rfind("cairn: " + dir + "/cli_map.yaml:4: unknown key 'negatee'", 0), 0u) << err;
+  const std::string good = "image: " + png + "\nresolution: 0.05\norigin: [-60, -40, 0]\n";
+  EXPECT_EQ(render(good, "--times '' --bbox 14,-12,16,-10"), 2);
+  EXPECT_EQ(err.rfind("cairn: copa: --times needs at least one number\n", 0), 0u) << err;
+  EXPECT_EQ(render(good, "--times 40, --bbox 14,-12,16,-10"), 2);
+  EXPECT_EQ(err.rfind("cairn: copa: bad number '' in --times\n", 0), 0u) << err;
+  EXPECT_EQ(render(good, "--times 40 --bbox -1e9,-1e9,1e9,1e9"), 2);
+  EXPECT_EQ(err.rfind("cairn: copa: render area is 4e+09 x 4e+09 cells", 0), 0u) << err;
 }

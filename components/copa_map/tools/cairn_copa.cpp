@@ -5,6 +5,7 @@
 //   render  --model <file> --map <map.yaml> --times t1,t2,… [--bbox x0,y0,x1,y1] -o <prefix>
 // Bad input: one line `cairn: <file>:<line>: <what>` on stderr and exit code 2. A diverged training writes the
 // last good model and exits with code 3.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -36,25 +37,25 @@ const char* kUsage =
     "  predict --model <file> --points <csv with x1,x2,t> -o <csv>\n"
     "  render  --model <file> --map <map.yaml> --times t1,t2,... [--bbox x0,y0,x1,y1] -o <prefix>\n";
 
-std::map<std::string, std::string> parseArgs(int argc, char** argv, int first) {
+// Options of `verb` (names without dashes, "out" for -o); anything else, a repeated option or a missing value
+// is a usage error naming the option.
+std::map<std::string, std::string> parseArgs(int argc, char** argv, int first,
+                                             const std::vector<std::string>& allowed) {
   std::map<std::string, std::string> a;
   for (int i = first; i < argc; ++i) {
-    std::string k = argv[i];
-    if (k == "--json") {
-      a.insert_or_assign(std::string("json"), std::string("1"));
+    const std::string arg = argv[i];
+    std::string k = arg == "-o"               ? std::string("out")
+                    : arg.rfind("--", 0) == 0 ? arg.substr(2)
+                                              : std::string();
+    if (k.empty() || std::find(allowed.begin(), allowed.end(), k) == allowed.end())
+      throw UsageError("unknown option '" + arg + "'");
+    if (a.count(k)) throw UsageError("option '" + arg + "' given twice");
+    if (k == "json") {
+      a.emplace(k, "1");
       continue;
     }
-    if (k.rfind("-", 0) != 0 || i + 1 >= argc) {
-      std::string msg = "bad or incomplete option '";
-      msg.append(k).append("'");
-      throw UsageError(msg);
-    }
-    if (k == "-o") {
-      k = std::string("out");
-    } else {
-      k.erase(0, k.find_first_not_of('-'));
-    }
-    a[k] = argv[++i];
+    if (i + 1 >= argc) throw UsageError("option '" + arg + "' needs a value");
+    a.emplace(k, argv[++i]);
   }
   return a;
 }
@@ -72,10 +73,107 @@ std::string need(const std::map<std::string, std::string>& a, const std::string&
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
-// Config file: `key = value` lines, '#' comments. Unknown keys are errors (with file and line).
+// Config file keys: where each value goes and its range ([lo, hi], or (lo, hi] when lo_open). Integer keys
+// take whole numbers only, flags 0 or 1.
+struct ConfigKey {
+  const char* name;
+  enum Kind { kReal, kInt, kFlag } kind;
+  double lo, hi;
+  bool lo_open;
+  void (*set)(double v, CopaMapConfig& mc, TrainConfig& tc);
+};
+
+constexpr double kIntMax = 2147483647.0;
+constexpr double kSeedMax = 9007199254740992.0;  // 2^53: every integer up to here is exact in a double
+
+const ConfigKey kConfigKeys[] = {
+    {"batch_size", ConfigKey::kInt, 1, kIntMax, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.batch_size = static_cast<int>(v); }},
+    {"max_iterations", ConfigKey::kInt, 1, kIntMax, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.max_iterations = static_cast<int>(v); }},
+    {"max_seconds", ConfigKey::kReal, 0, 1e9, true,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.max_seconds = v; }},
+    {"natgrad_gamma", ConfigKey::kReal, 0, 1, true,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.natgrad_gamma_start = t.natgrad_gamma_end = v; }},
+    {"natgrad_gamma_start", ConfigKey::kReal, 0, 1, true,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.natgrad_gamma_start = v; }},
+    {"natgrad_gamma_end", ConfigKey::kReal, 0, 1, true,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.natgrad_gamma_end = v; }},
+    {"adam_lr_start", ConfigKey::kReal, 0, 1, true,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.adam_lr_start = v; }},
+    {"adam_lr_end", ConfigKey::kReal, 0, 1, true,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.adam_lr_end = v; }},
+    {"decay_steps", ConfigKey::kInt, 1, kIntMax, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.decay_steps = static_cast<int>(v); }},
+    {"hyper_every", ConfigKey::kInt, 1, kIntMax, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.hyper_every = static_cast<int>(v); }},
+    {"hyper_warmup", ConfigKey::kInt, 0, kIntMax, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.hyper_warmup = static_cast<int>(v); }},
+    {"train_hyper", ConfigKey::kFlag, 0, 1, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.train_hyper = v != 0; }},
+    {"train_inducing", ConfigKey::kFlag, 0, 1, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.train_inducing = v != 0; }},
+    {"inducing_lr", ConfigKey::kReal, 0, 1e3, true,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.inducing_lr = v; }},
+    {"tolerance", ConfigKey::kReal, 0, 1, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.tolerance = v; }},
+    {"elbo_floor", ConfigKey::kReal, 0, 1e9, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.elbo_floor = v; }},
+    {"patience", ConfigKey::kInt, 1, 1e6, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.patience = static_cast<int>(v); }},
+    {"decay_tau", ConfigKey::kReal, 0, 1e12, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.decay_tau = v; }},
+    {"plateau_factor", ConfigKey::kReal, 0, 1, true,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.plateau_factor = v; }},
+    {"average_iterates", ConfigKey::kFlag, 0, 1, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.average_iterates = v != 0; }},
+    {"mixed_precision", ConfigKey::kFlag, 0, 1, false,
+     [](double v, CopaMapConfig&, TrainConfig& t) { t.mixed_precision = v != 0; }},
+    {"seed", ConfigKey::kInt, 0, kSeedMax, false,
+     [](double v, CopaMapConfig& m, TrainConfig& t) {
+       t.seed = m.seed = m.period_init.seed = static_cast<std::uint64_t>(v);
+     }},
+    {"alpha_ind", ConfigKey::kReal, 0, 1, true,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.alpha_ind = v; }},
+    {"g_inducing_ratio", ConfigKey::kReal, 0, 1, true,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.g_inducing_ratio = v; }},
+    {"spatial_lengthscale", ConfigKey::kReal, 0, 1e6, true,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.spatial_lengthscale = v; }},
+    {"periodic_lengthscale", ConfigKey::kReal, 0, 1e6, true,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.periodic_lengthscale = v; }},
+    {"jitter", ConfigKey::kReal, 0, 1, false, [](double v, CopaMapConfig& m, TrainConfig&) { m.jitter = v; }},
+    {"gh_order", ConfigKey::kInt, 1, 100, false,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.gh_order = static_cast<int>(v); }},
+    {"cell_size", ConfigKey::kReal, 0, 1e6, true,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.cell_size = v; }},
+    {"time_bin", ConfigKey::kReal, 0, 1e12, true,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.time_bin = v; }},
+    {"init_cell_size", ConfigKey::kReal, 0, 1e6, true,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.period_init.cell_size = v; }},
+    {"period_min", ConfigKey::kReal, 0, 1e12, true,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.period_init.period_min = v; }},
+    {"period_max", ConfigKey::kReal, 0, 1e12, false,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.period_init.period_max = v; }},
+    {"period_step", ConfigKey::kReal, 0, 1e12, true,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.period_init.period_step = v; }},
+    {"num_series", ConfigKey::kInt, 1, 1e6, false,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.period_init.num_series = static_cast<int>(v); }},
+    {"max_periods", ConfigKey::kInt, 1, 1000, false,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.period_init.max_periods = static_cast<int>(v); }},
+    {"max_variance", ConfigKey::kReal, 0, 1, true,
+     [](double v, CopaMapConfig& m, TrainConfig&) { m.period_init.max_variance = v; }},
+};
+
+std::string rangeText(const ConfigKey& k) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%s%.16g, %.16g]", k.lo_open ? "(" : "[", k.lo, k.hi);
+  return buf;
+}
+
+// Config file: `key = value` lines, '#' comments. Unknown keys, values that are not one number, and values
+// out of the key's range are errors (with file and line).
 void applyConfig(const std::string& path, CopaMapConfig& mc, TrainConfig& tc) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, 0, "cannot open config file");
+  std::ifstream in = openInputFile(path, "config file");
   std::string line;
   long ln = 0;
   while (std::getline(in, line)) {
@@ -94,48 +192,24 @@ void applyConfig(const std::string& path, CopaMapConfig& mc, TrainConfig& tc) {
       }
       continue;
     }
+    const ConfigKey* k = nullptr;
+    for (const ConfigKey& c : kConfigKeys)
+      if (key == c.name) k = &c;
+    if (k == nullptr) throw InputError(path, ln, "unknown key '" + key + "'");
     char* end = nullptr;
     const double v = std::strtod(val.c_str(), &end);
-    if (end == val.c_str() || !std::isfinite(v)) throw InputError(path, ln, "value of '" + key + "' is not a number");
-    if (key == "batch_size") tc.batch_size = static_cast<int>(v);
-    else if (key == "max_iterations") tc.max_iterations = static_cast<int>(v);
-    else if (key == "max_seconds") tc.max_seconds = v;
-    else if (key == "natgrad_gamma") tc.natgrad_gamma_start = tc.natgrad_gamma_end = v;
-    else if (key == "natgrad_gamma_start") tc.natgrad_gamma_start = v;
-    else if (key == "natgrad_gamma_end") tc.natgrad_gamma_end = v;
-    else if (key == "adam_lr_start") tc.adam_lr_start = v;
-    else if (key == "adam_lr_end") tc.adam_lr_end = v;
-    else if (key == "decay_steps") tc.decay_steps = static_cast<int>(v);
-    else if (key == "hyper_every") tc.hyper_every = static_cast<int>(v);
-    else if (key == "hyper_warmup") tc.hyper_warmup = static_cast<int>(v);
-    else if (key == "train_hyper") tc.train_hyper = v != 0;
-    else if (key == "train_inducing") tc.train_inducing = v != 0;
-    else if (key == "inducing_lr") tc.inducing_lr = v;
-    else if (key == "tolerance") tc.tolerance = v;
-    else if (key == "elbo_floor") tc.elbo_floor = v;
-    else if (key == "patience") tc.patience = static_cast<int>(v);
-    else if (key == "decay_tau") tc.decay_tau = v;
-    else if (key == "plateau_factor") tc.plateau_factor = v;
-    else if (key == "average_iterates") tc.average_iterates = v != 0;
-    else if (key == "mixed_precision") tc.mixed_precision = v != 0;
-    else if (key == "seed") tc.seed = mc.seed = mc.period_init.seed = static_cast<std::uint64_t>(v);
-    else if (key == "alpha_ind") mc.alpha_ind = v;
-    else if (key == "g_inducing_ratio") mc.g_inducing_ratio = v;
-    else if (key == "spatial_lengthscale") mc.spatial_lengthscale = v;
-    else if (key == "periodic_lengthscale") mc.periodic_lengthscale = v;
-    else if (key == "jitter") mc.jitter = v;
-    else if (key == "gh_order") mc.gh_order = static_cast<int>(v);
-    else if (key == "cell_size") mc.cell_size = v;
-    else if (key == "time_bin") mc.time_bin = v;
-    else if (key == "init_cell_size") mc.period_init.cell_size = v;
-    else if (key == "period_min") mc.period_init.period_min = v;
-    else if (key == "period_max") mc.period_init.period_max = v;
-    else if (key == "period_step") mc.period_init.period_step = v;
-    else if (key == "num_series") mc.period_init.num_series = static_cast<int>(v);
-    else if (key == "max_periods") mc.period_init.max_periods = static_cast<int>(v);
-    else if (key == "max_variance") mc.period_init.max_variance = v;
-    else throw InputError(path, ln, "unknown key '" + key + "'");
+    if (end == val.c_str() || *end != '\0' || !std::isfinite(v))
+      throw InputError(path, ln, "value of '" + key + "' is not a number: '" + val + "'");
+    if (k->kind == ConfigKey::kFlag && v != 0 && v != 1)
+      throw InputError(path, ln, "value of '" + key + "' must be 0 or 1, got '" + val + "'");
+    if (k->kind == ConfigKey::kInt && v != std::floor(v))
+      throw InputError(path, ln, "value of '" + key + "' must be an integer, got '" + val + "'");
+    if (!(k->lo_open ? v > k->lo : v >= k->lo) || !(v <= k->hi))
+      throw InputError(path, ln,
+                       "value of '" + key + "' must be in " + rangeText(*k) + ", got '" + val + "'");
+    k->set(v, mc, tc);
   }
+  if (in.bad()) throw InputError(path, ln, "read error");
 }
 
 void progressBar(int it, double elbo, double secs, const TrainConfig& tc) {
@@ -264,18 +338,27 @@ int cmdEval(const std::map<std::string, std::string>& a) {
   return 0;
 }
 
+// Comma-separated finite numbers; an empty list or an empty item is an error naming the option.
 std::vector<double> parseList(const std::string& s, const std::string& what) {
+  if (s.empty()) throw UsageError(what + " needs at least one number");
   std::vector<double> v;
-  std::stringstream ss(s);
-  std::string tok;
-  while (std::getline(ss, tok, ',')) {
+  std::string::size_type pos = 0;
+  while (true) {
+    const auto comma = s.find(',', pos);
+    const std::string tok = trim(s.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos));
     char* end = nullptr;
     const double d = std::strtod(tok.c_str(), &end);
     if (end == tok.c_str() || *end != '\0' || !std::isfinite(d)) throw UsageError("bad number '" + tok + "' in " + what);
     v.push_back(d);
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
   }
   return v;
 }
+
+// Largest heat map `render` writes: cells of the model grid and pixels of the PNG (3 bytes each).
+constexpr double kMaxRenderCells = 1e7;
+constexpr double kMaxRenderPixels = 1e8;
 
 int cmdRender(const std::map<std::string, std::string>& a) {
   const CopaMap cm = loadModel(need(a, "model"));
@@ -295,7 +378,18 @@ int cmdRender(const std::map<std::string, std::string>& a) {
     y1 = Z.col(1).maxCoeff() + 2;
   }
   const double cs = cm.cellSize();
-  const int nx = static_cast<int>(std::ceil((x1 - x0) / cs)), ny = static_cast<int>(std::ceil((y1 - y0) / cs));
+  const double fx = std::ceil((x1 - x0) / cs), fy = std::ceil((y1 - y0) / cs);
+  const double px = std::max(1.0, std::round(cs / map.map.resolution));  // PNG pixels per cell side
+  if (!(fx * fy <= kMaxRenderCells) || !(fx * fy * px * px <= kMaxRenderPixels)) {
+    char buf[256];
+    std::snprintf(
+        buf, sizeof buf,
+        "render area is %.4g x %.4g cells of %g m (%.4g PNG pixels); at most %.0e cells and %.0e pixels "
+        "(give a smaller --bbox)",
+        fx, fy, cs, fx * fy * px * px, kMaxRenderCells, kMaxRenderPixels);
+    throw UsageError(buf);
+  }
+  const int nx = static_cast<int>(fx), ny = static_cast<int>(fy);
   for (double t : times) {
     Eigen::MatrixXd Q(static_cast<Eigen::Index>(nx) * ny, 3);
     for (int j = 0; j < ny; ++j)
@@ -326,11 +420,12 @@ int main(int argc, char** argv) {
   }
   const std::string verb = argv[1];
   try {
-    const auto a = parseArgs(argc, argv, 2);
-    if (verb == "train") return cmdTrain(a);
-    if (verb == "eval") return cmdEval(a);
-    if (verb == "predict") return cmdPredict(a);
-    if (verb == "render") return cmdRender(a);
+    if (verb == "train") return cmdTrain(parseArgs(argc, argv, 2, {"train", "inducing", "config", "out"}));
+    if (verb == "eval")
+      return cmdEval(parseArgs(argc, argv, 2, {"model", "train", "test", "inducing", "config", "json"}));
+    if (verb == "predict") return cmdPredict(parseArgs(argc, argv, 2, {"model", "points", "out"}));
+    if (verb == "render")
+      return cmdRender(parseArgs(argc, argv, 2, {"model", "map", "times", "bbox", "out"}));
     throw UsageError("unknown verb '" + verb + "'");
   } catch (const UsageError& e) {
     std::fprintf(stderr, "cairn: copa: %s\n%s", e.what(), kUsage);

@@ -1,5 +1,7 @@
 #include "image_io.hpp"
 
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -7,68 +9,72 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <sstream>
 
 #include "cairn/copa_map/io.hpp"
 
 namespace cairn::copa_map::tools {
 namespace {
-std::string trim(const std::string& s) {
-  const auto a = s.find_first_not_of(" \t\r\n");
-  if (a == std::string::npos) return "";
-  return s.substr(a, s.find_last_not_of(" \t\r\n") - a + 1);
-}
+long lineOf(const YAML::Node& n) { return std::max(0, n.Mark().line + 1); }
 
 // A finite number, or InputError naming the file, line and key.
-double yamlNumber(const std::string& path, long line, const std::string& key, const std::string& text) {
+double yamlNumber(const std::string& path, const YAML::Node& n, const std::string& key) {
+  const std::string text = n.IsScalar() ? n.Scalar() : std::string();
   char* end = nullptr;
   const double x = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || !std::isfinite(x))
-    throw InputError(path, line, "'" + key + "' expects a number, got '" + text + "'");
+    throw InputError(path, lineOf(n), "'" + key + "' expects a number, got '" + text + "'");
   return x;
 }
 }  // namespace
 
 MapImage loadMapYaml(const std::string& yaml_path) {
-  std::ifstream in(yaml_path);
-  if (!in) throw InputError(yaml_path, 0, "cannot open map YAML");
-  std::string line, image, list_key;
+  std::ifstream in = openInputFile(yaml_path, "map YAML");
+  YAML::Node root;
+  try {
+    root = YAML::Load(in);
+  } catch (const YAML::Exception& e) {
+    throw InputError(yaml_path, e.mark.line + 1, "YAML syntax: " + e.msg);
+  }
+  if (!root.IsMap())
+    throw InputError(yaml_path, lineOf(root), "map YAML needs image, resolution > 0 and origin");
+  std::string image;
   double res = 0, occ_th = 0.65;
   int negate = 0;
   std::vector<double> origin;
-  long ln = 0;
-  while (std::getline(in, line)) {
-    ++ln;
-    const std::string t = trim(line);
-    if (t.empty() || t[0] == '#') continue;
-    if (t[0] == '-' && list_key == "origin") {
-      origin.push_back(yamlNumber(yaml_path, ln, "origin", trim(t.substr(1))));
-      continue;
-    }
-    const auto c = t.find(':');
-    if (c == std::string::npos) throw InputError(yaml_path, ln, "expected 'key: value'");
-    const std::string key = trim(t.substr(0, c)), val = trim(t.substr(c + 1));
-    list_key = val.empty() ? key : "";
-    if (key == "image") image = val;
-    else if (key == "resolution") res = yamlNumber(yaml_path, ln, key, val);
-    else if (key == "negate") {
-      if (val != "0" && val != "1") throw InputError(yaml_path, ln, "'negate' expects 0 or 1, got '" + val + "'");
-      negate = val == "1";
+  for (const auto& kv : root) {
+    const std::string key = kv.first.Scalar();
+    const YAML::Node& v = kv.second;
+    const long ln = lineOf(kv.first);
+    if (key == "image") {
+      if (!v.IsScalar() || v.Scalar().empty()) throw InputError(yaml_path, ln, "'image' expects a file name");
+      image = v.Scalar();
+    } else if (key == "resolution") {
+      res = yamlNumber(yaml_path, v, key);
+    } else if (key == "negate") {
+      if (!v.IsScalar() || (v.Scalar() != "0" && v.Scalar() != "1"))
+        throw InputError(yaml_path, ln,
+                         "'negate' expects 0 or 1, got '" + (v.IsScalar() ? v.Scalar() : "") + "'");
+      negate = v.Scalar() == "1";
     } else if (key == "occupied_thresh") {
-      occ_th = yamlNumber(yaml_path, ln, key, val);
+      occ_th = yamlNumber(yaml_path, v, key);
       if (occ_th < 0.0 || occ_th > 1.0) throw InputError(yaml_path, ln, "'occupied_thresh' must be in [0, 1]");
-    } else if (key == "origin" && !val.empty()) {
-      std::string v = val;
-      std::replace(v.begin(), v.end(), '[', ' ');
-      std::replace(v.begin(), v.end(), ']', ' ');
-      std::replace(v.begin(), v.end(), ',', ' ');
-      std::stringstream ss(v);
-      std::string item;
-      while (ss >> item) origin.push_back(yamlNumber(yaml_path, ln, key, item));
+    } else if (key == "free_thresh") {
+      yamlNumber(yaml_path, v, key);  // map_server key, not used here
+    } else if (key == "mode") {
+      if (!v.IsScalar()) throw InputError(yaml_path, ln, "'mode' expects trinary, scale or raw");
+    } else if (key == "origin") {
+      if (!v.IsSequence() || v.size() < 2 || v.size() > 3)
+        throw InputError(yaml_path, ln, "'origin' expects [x, y] or [x, y, yaw]");
+      for (const auto& item : v) origin.push_back(yamlNumber(yaml_path, item, key));
+    } else {
+      throw InputError(yaml_path, ln,
+                       "unknown key '" + key +
+                           "' (map_server keys: image, resolution, origin, negate, "
+                           "occupied_thresh, free_thresh, mode)");
     }
   }
   if (image.empty() || !(res > 0) || origin.size() < 2)
-    throw InputError(yaml_path, ln, "map YAML needs image, resolution > 0 and origin");
+    throw InputError(yaml_path, lineOf(root), "map YAML needs image, resolution > 0 and origin");
   MapImage m;
   m.image = std::filesystem::path(image).is_absolute()
                 ? image

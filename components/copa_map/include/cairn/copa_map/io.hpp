@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <fstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -27,11 +28,16 @@ class InputError : public std::runtime_error {
 struct CsvTable {
   std::vector<std::string> header;
   Eigen::MatrixXd data;  // rows x columns, all values finite
+  std::vector<long> lines;                    // file line of each data row (blank lines are skipped)
   int column(const std::string& name) const;  // -1 when missing
 };
 
 // Strips spaces, tabs, CR and LF at both ends (the CSV and config-file readers).
 std::string trim(const std::string& s);
+
+// Opens a file for reading; InputError(path, 0, "cannot open <what>") if it cannot be opened or is a
+// directory (std::ifstream opens a directory and then reads nothing, which would look like an empty file).
+std::ifstream openInputFile(const std::string& path, const std::string& what);
 
 // Reads a numeric CSV with a header line. Every row must have the header's column count and finite numbers.
 CsvTable readCsv(const std::string& path);
@@ -42,7 +48,8 @@ struct GridData {
   Eigen::VectorXd durations;  // Δ_i if a `duration` column exists, else empty
 };
 
-// Grid file: columns x1, x2, t and (if require_y) y; optional `duration` (must be >= 0). Empty files are errors.
+// Grid file: columns x1, x2, t and (if require_y) y (a rate, must be >= 0); optional `duration` (must be >=
+// 0). Empty files are errors.
 GridData readGridCsv(const std::string& path, bool require_y = true);
 // Inducing points: columns x_z1, x_z2, t_z (copa-map) or x1, x2, t.
 Eigen::MatrixXd readInducingCsv(const std::string& path);
