@@ -1,16 +1,16 @@
 #include "cairn/graph_slam/g2o_io.hpp"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <istream>
 #include <map>
 #include <ostream>
 #include <set>
 #include <string_view>
-
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 
 namespace cairn::graph_slam {
 
@@ -22,6 +22,14 @@ G2oError::G2oError(std::string file, std::size_t line, const std::string& what)
 
 namespace {
 
+// Text of the file quoted in a message: at most 40 characters, so that a huge garbage token does not make a
+// huge error line.
+std::string excerpt(std::string_view s) {
+  constexpr std::size_t kMax = 40;
+  if (s.size() <= kMax) return std::string(s);
+  return std::string(s.substr(0, kMax)) + "... (" + std::to_string(s.size()) + " bytes)";
+}
+
 struct Line {
   const std::string* file;
   std::size_t number;
@@ -31,11 +39,11 @@ struct Line {
 
   void expectFields(std::size_t n) const {
     if (tok.size() < n) {
-      fail(std::string(tok[0]) + " needs " + std::to_string(n - 1) + " fields, got " +
+      fail(excerpt(tok[0]) + " needs " + std::to_string(n - 1) + " fields, got " +
            std::to_string(tok.size() - 1) + " (truncated line?)");
     }
     if (tok.size() > n) {
-      fail(std::string(tok[0]) + " needs " + std::to_string(n - 1) + " fields, got " +
+      fail(excerpt(tok[0]) + " needs " + std::to_string(n - 1) + " fields, got " +
            std::to_string(tok.size() - 1));
     }
   }
@@ -45,11 +53,13 @@ struct Line {
     if (!s.empty() && s.front() == '+') s.remove_prefix(1);
     double v = 0.0;
     const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-    if (ec == std::errc::result_out_of_range) fail("field " + std::to_string(k) + " '" + std::string(tok[k]) + "' is out of range");
+    if (ec == std::errc::result_out_of_range)
+      fail("field " + std::to_string(k) + " '" + excerpt(tok[k]) + "' is out of range");
     if (ec != std::errc() || ptr != s.data() + s.size() || s.empty()) {
-      fail("field " + std::to_string(k) + " '" + std::string(tok[k]) + "' is not a number");
+      fail("field " + std::to_string(k) + " '" + excerpt(tok[k]) + "' is not a number");
     }
-    if (!std::isfinite(v)) fail("field " + std::to_string(k) + " is " + std::string(tok[k]) + " (NaN/Inf not allowed)");
+    if (!std::isfinite(v))
+      fail("field " + std::to_string(k) + " is " + excerpt(tok[k]) + " (NaN/Inf not allowed)");
     return v;
   }
 
@@ -58,7 +68,7 @@ struct Line {
     VariableId v = 0;
     const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
     if (ec != std::errc() || ptr != s.data() + s.size()) {
-      fail("field " + std::to_string(k) + " '" + std::string(s) + "' is not an integer vertex id");
+      fail("field " + std::to_string(k) + " '" + excerpt(s) + "' is not an integer vertex id");
     }
     return v;
   }
@@ -154,11 +164,11 @@ PoseGraph readG2o(std::istream& in, const std::string& name, const G2oReadOption
           ++report->skipped_lines;
           if (warned_tags.insert(std::string(tag)).second) {
             report->warnings.push_back(name + ":" + std::to_string(number) + ": skipping unknown tag " +
-                                       std::string(tag));
+                                       excerpt(tag));
           }
         }
       } else {
-        line.fail("unknown tag '" + std::string(tag) + "'");
+        line.fail("unknown tag '" + excerpt(tag) + "'");
       }
     } catch (const std::invalid_argument& e) {
       line.fail(e.what());
@@ -166,6 +176,7 @@ PoseGraph readG2o(std::istream& in, const std::string& name, const G2oReadOption
   }
   if (in.bad()) throw G2oError(name, number, "read error");
 
+  std::vector<std::size_t> factor_lines;  // file line of each factor, in graph.factors() order
   for (auto& [num, etext] : edges) {
     line.number = num;
     split(etext, line.tok);
@@ -209,11 +220,25 @@ PoseGraph readG2o(std::istream& in, const std::string& name, const G2oReadOption
     } catch (const std::invalid_argument& e) {
       line.fail(e.what());  // kind mismatch, self loop, ...
     }
+    factor_lines.resize(graph.factors().size(), num);
+  }
+  // Finite numbers can still overflow the cost (e.g. 1e300 m): the optimizer would start from an infinite
+  // chi2.
+  const auto& values = graph.variables();
+  for (std::size_t k = 0; k < graph.factors().size(); ++k) {
+    const Factor& f = graph.factors()[k];
+    const int d = errorDim(f.kind);
+    const Vector6d e = factorError(f, values);
+    if (!std::isfinite(e.head(d).dot(f.information.topLeftCorner(d, d) * e.head(d))))
+      throw G2oError(name, factor_lines[k],
+                     "the edge's chi2 at the initial values is not finite (values too large)");
   }
   return graph;
 }
 
 PoseGraph readG2o(const std::string& path, const G2oReadOptions& options, G2oReadReport* report) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw G2oError(path, 0, "cannot open file: is a directory");
   std::ifstream in(path);
   if (!in) throw G2oError(path, 0, "cannot open file");
   return readG2o(in, path, options, report);

@@ -135,6 +135,10 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   double cost = linearize();
   sum.initial_chi2 = chi2;
   sum.initial_cost = cost;
+  // An overflowing cost (e.g. values near 1e300) gives no usable step or convergence test: stop, not
+  // converged.
+  const bool finite_start = std::isfinite(cost);
+  if (!finite_start) sum.termination = "initial cost is not finite";
   double* hv = n > 0 ? sys.cholesky().values() : nullptr;
   const std::vector<int>& diag = sys.diagIndex();
   auto save_diag = [&] {
@@ -145,7 +149,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   auto set_damping = [&](double mu) {
     for (int k = 0; k < n; ++k) hv[diag[k]] = hdiag[k] + mu * dscale[k];
   };
-  if (n == 0) {
+  if (n == 0 && finite_start) {
     sum.final_chi2 = chi2;
     sum.final_cost = cost;
     sum.converged = true;
@@ -214,7 +218,7 @@ OptimizerSummary Optimizer::optimize(PoseGraph& graph) {
   int chord_run = 0;          // consecutive chord steps on the current factor
   double full_decrease = 0.0; // decrease of the last step with a fresh factorization
 
-  while (n > 0 && sum.iterations < options_.max_iterations) {
+  while (finite_start && n > 0 && sum.iterations < options_.max_iterations) {
     if (grad.lpNorm<Eigen::Infinity>() <= options_.gradient_tolerance) {
       sum.converged = true;
       sum.termination = "gradient tolerance";

@@ -485,3 +485,20 @@ TEST(Optimizer, FactorizationReplayDetectsSingularSystemsLikeCholmod) {
   g.addPoint2(1000, Eigen::Vector2d(3, 3));
   expectReplayBitIdentical(g, gs::Algorithm::kGaussNewton, true);
 }
+
+TEST(Optimizer, NonFiniteInitialCostIsNotConverged) {
+  // Finite values whose chi2 overflows (1e300 m): no step, and not reported as converged.
+  for (const gs::Algorithm a : {gs::Algorithm::kLevenbergMarquardt, gs::Algorithm::kGaussNewton, gs::Algorithm::kDogleg}) {
+    gs::PoseGraph g;
+    g.addPose2(0, gs::Pose2{Eigen::Vector2d(0, 0), 0});
+    g.addPose2(1, gs::Pose2{Eigen::Vector2d(1e300, 0), 0});
+    g.addBetween2(0, 1, gs::Pose2{Eigen::Vector2d(1, 0), 0}, Eigen::Matrix3d::Identity());
+    gs::OptimizerOptions o;
+    o.algorithm = a;
+    gs::Optimizer opt(o);
+    const auto sum = opt.optimize(g);
+    EXPECT_FALSE(sum.converged);
+    EXPECT_EQ(sum.termination, "initial cost is not finite");
+    EXPECT_EQ(sum.iterations, 0);
+  }
+}

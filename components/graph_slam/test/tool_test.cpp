@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -81,4 +82,47 @@ TEST(Tool, BadInputGivesFileLineAndExitCode2) {
   r = run("optimize " + bad + " --solver newton");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("unknown solver 'newton'"), std::string::npos);
+}
+
+namespace {
+
+std::string tempFile(const std::string& name, const std::string& text) {
+  const std::string p = (std::filesystem::temp_directory_path() / name).string();
+  std::ofstream(p, std::ios::binary) << text;
+  return p;
+}
+
+std::size_t lines(const std::string& s) {
+  return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n'));
+}
+
+}  // namespace
+
+TEST(Tool, OptimizeRejectsOverflowingEmptyAndHugeLines) {
+  // Finite numbers whose chi2 overflows: an error naming the edge's line, not "chi2: null, converged".
+  const std::string huge = tempFile("cairn_slam_huge.g2o",
+                                    "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1e300 0 0\n"
+                                    "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\n");
+  ToolRun r = run("optimize " + huge + " --json");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  EXPECT_EQ(r.err, "cairn: " + huge +
+                       ":3: the edge's chi2 at the initial values is not finite (values too large)\n");
+
+  const std::string empty = tempFile("cairn_slam_empty.g2o", "# nothing\n");
+  r = run("optimize " + empty);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: " + empty + ":0: no vertices (empty graph)\n");
+
+  // A 1 MB garbage token is quoted in at most a few dozen characters.
+  const std::string garbage =
+      tempFile("cairn_slam_garbage.g2o", "VERTEX_SE2 0 0 0 " + std::string(1 << 20, 'x') + "\n");
+  r = run("optimize " + garbage);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(lines(r.err), 1u);
+  EXPECT_LT(r.err.size(), 200u) << r.err.substr(0, 300);
+  EXPECT_NE(r.err.find(":1: field 4 'xxxxxxxx"), std::string::npos) << r.err.substr(0, 300);
+  r = run("optimize " + std::filesystem::temp_directory_path().string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(":0: cannot open file: is a directory"), std::string::npos) << r.err;
 }

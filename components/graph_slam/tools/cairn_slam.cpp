@@ -6,6 +6,7 @@
 // "certificate" object after the documented keys.
 // Bad input: one line `cairn: <file>:<line>: <what>` on stderr, exit code 2.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -131,6 +132,10 @@ int optimizeVerb(const std::vector<std::string>& args) {
     std::cerr << "cairn: " << e.what() << "\n";
     return 2;
   }
+  if (graph.variables().empty()) {
+    std::cerr << "cairn: " << in << ":0: no vertices (empty graph)\n";
+    return 2;
+  }
   for (const std::string& w : report.warnings) std::cerr << "cairn: warning: " << w << "\n";
   if (report.clamped_information > 0) {
     std::cerr << "cairn: warning: " << in << ": projected " << report.clamped_information
@@ -158,6 +163,10 @@ int optimizeVerb(const std::vector<std::string>& args) {
     }
   } catch (const std::exception& e) {
     std::cerr << "cairn: " << in << ":0: " << e.what() << "\n";
+    return 2;
+  }
+  if (!std::isfinite(sum.final_chi2)) {  // e.g. --init produced values whose cost overflows
+    std::cerr << "cairn: " << in << ":0: chi2 is not finite after optimization (" << sum.termination << ")\n";
     return 2;
   }
   const double time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
