@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string_view>
@@ -38,6 +39,8 @@ bool skippable(const std::string& line) {
 
 template <typename Fn>
 void forEachLine(const std::string& path, Fn&& fn) {
+  std::error_code ec;  // an ifstream opens a directory and reads nothing from it: not an empty file
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path, 0, "cannot open file: is a directory");
   std::ifstream in(path);
   if (!in) throw InputError(path, 0, "cannot open file");
   std::string line;

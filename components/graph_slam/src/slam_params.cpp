@@ -151,9 +151,12 @@ void setSlamParameter(SlamOptions& options, const std::string& name, const std::
   if (p == nullptr) throw std::invalid_argument(name + ": unknown SLAM parameter");
   const SlamParamRef ref = p->ref(options);
   auto range = [&](double v) {
-    if (!(v >= p->min && v <= p->max))
-      throw std::invalid_argument(name + ": " + value + " is outside [" + std::to_string(p->min) + ", " +
-                                  std::to_string(p->max) + "]");
+    if (v >= p->min && v <= p->max) return;
+    if (std::isnan(v)) throw std::invalid_argument(name + ": expected a number, got '" + value + "'");
+    char buf[64];  // %g: the unbounded default range prints as [-1e+300, 1e+300], not 300 digits
+
+    std::snprintf(buf, sizeof buf, "[%g, %g]", p->min, p->max);
+    throw std::invalid_argument(name + ": " + value + " is outside " + buf);
   };
   if (auto* d = std::get_if<double*>(&ref)) {
     const auto v = parseWhole<double>(value, [](const std::string& t, std::size_t* pos) { return std::stod(t, pos); });

@@ -126,3 +126,62 @@ TEST(Tool, OptimizeRejectsOverflowingEmptyAndHugeLines) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find(":0: cannot open file: is a directory"), std::string::npos) << r.err;
 }
+
+TEST(Tool, RunAndEvalRejectBadOptionsAndFiles) {
+  const std::string tmp = std::filesystem::temp_directory_path().string();
+  const std::string out = tmp + "/cairn_slam_run_bad";
+  // Scan stamps going backwards (real logs have some: Intel): a warning naming the first one, SLAM drops
+  // them, and the data duration is the stamps' span (it was last - first = -69 s here, with a negative
+  // real-time factor).
+  std::string beams, text;
+  for (int i = 0; i < 180; ++i) beams += " 2.00";
+  for (const char* stamp : {"100.000000", "31.000000", "101.000000"})
+    text += "FLASER 180" + beams + " 0 0 0 0 0 0 " + stamp + " nohost " + stamp + "\n";
+  const std::string log = tempFile("cairn_slam_backwards.log", text);
+  ToolRun r = run("run --carmen " + log + " --out " + out + " --quiet --json");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "cairn: slam: warning: " + log +
+                       ":2: scan timestamp before an earlier scan's (1 such scans; "
+                       "SLAM rejects them)\n");
+  EXPECT_NE(r.out.find("\"scans\":3,\"scans_rejected\":1,"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"data_duration_s\":70,"), std::string::npos) << r.out;
+  // No scan accepted (3 beams < filter.min_points): an error, not an OpenCV assertion on the empty map.
+  const std::string tiny =
+      tempFile("cairn_slam_tiny.log", "FLASER 3 1.00 2.00 3.00 0 0 0 0 0 0 100.0 nohost 100.0\n");
+  r = run("run --carmen " + tiny + " --out " + out + " --quiet");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: slam: " + tiny +
+                       ": none of the 1 scans was accepted by SLAM (1 rejected: too few valid "
+                       "returns, or time going backwards)\n");
+  r = run("run --carmen " + log + " --out " + out + " --limit -1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: slam: --limit must be >= 1 scan\n");
+  r = run("run --carmen " + log + " --out " + out + " --set laser_x=nan");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: slam: laser_x: expected a number, got 'nan'\n");
+  r = run("run --carmen " + log + " --out " + out + " --set r_min=5000");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: slam: r_min: 5000 is outside [0, 1000]\n");
+  r = run("run --carmen " + log + " --out " + out + " --config " + tmp);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: slam: " + tmp + ":0: cannot open file: is a directory\n");
+  const std::string garbage =
+      tempFile("cairn_slam_garbage.yaml", std::string("r_min: 3\n\xfe\x80\\\n\x00garbage\x7f", 16));
+  r = run("run --carmen " + log + " --out " + out + " --config " + garbage);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: slam: " + garbage + ":3: not a text file (control byte 0x00)\n");
+
+  const std::string poses = tempFile("cairn_slam_eval_poses.txt", "1 0 0 0\n2 1 0 0\n");
+  const std::string rel = tempFile("cairn_slam_eval.relations", "1 2 1 0 0 0 0 0\n");
+  r = run("eval --poses " + poses + " --relations " + rel + " --stamp-tolerance -1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: slam: --stamp-tolerance must be >= 0 s\n");
+  r = run("eval --poses " + tmp + " --relations " + rel);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: slam: " + tmp + ":0: cannot open file: is a directory\n");
+  r = run("eval --poses " + poses + " --relations " + tmp);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: slam: " + tmp + ":0: cannot open file: is a directory\n");
+  r = run("eval --poses " + poses + " --relations " + rel);
+  EXPECT_EQ(r.code, 0) << r.err;
+}

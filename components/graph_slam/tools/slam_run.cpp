@@ -1,4 +1,7 @@
 // `cairn slam run` (offline SLAM on a CARMEN log) and `cairn slam eval` (Kümmerle et al. 2009 relations metric).
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -6,9 +9,9 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <limits>
 #include <optional>
-#include <iostream>
 #include <string>
 #include <vector>
 
@@ -19,8 +22,6 @@
 #include "cairn/graph_slam/slam_params.hpp"
 #include "cairn/sim/carmen.hpp"
 #include "cairn/sim/world.hpp"  // InputError
-#include <yaml-cpp/yaml.h>
-
 #include "cli_util.hpp"
 #include "verbs.hpp"
 
@@ -73,8 +74,11 @@ int slamEvalVerb(const std::vector<std::string>& args) {
       else if (a == "--poses") poses_path = value();
       else if (a == "--json") json = true;
       else if (a == "--allow-missing") allow_missing = true;
-      else if (a == "--stamp-tolerance") opt.stamp_tolerance = cairn::slam_cli::parseDouble(value(), "--stamp-tolerance");
-      else if (a == "--odometry-baseline") odometry_log = value();
+      else if (a == "--stamp-tolerance") {
+        opt.stamp_tolerance = cairn::slam_cli::parseDouble(value(), "--stamp-tolerance");
+        if (opt.stamp_tolerance < 0) throw std::invalid_argument("--stamp-tolerance must be >= 0 s");
+      } else if (a == "--odometry-baseline")
+        odometry_log = value();
       else if (a == "--corrected") corrected_log = value();
       else if (a == "--carmen") raw_log = value();
       else throw std::invalid_argument("eval: unknown option '" + a + "'");
@@ -136,10 +140,25 @@ namespace {
 // Applies a flat `key: value` YAML config (keys of slamParameters()); errors name file:line and the key.
 void applyConfig(const std::string& path, gs::SlamOptions& options) {
   YAML::Node root;
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw cairn::sim::InputError(path, 0, "cannot open file: is a directory");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw cairn::sim::InputError(path, 0, "cannot open file");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Binary garbage is not YAML; yaml-cpp would quote the bytes (newlines included) in its message.
+  int line = 1;
+  for (const char c : text) {
+    const auto b = static_cast<unsigned char>(c);
+    if (b == '\n') ++line;
+    if ((b < 0x20 && b != '\n' && b != '\r' && b != '\t') || b == 0x7f) {
+      char what[64];
+      std::snprintf(what, sizeof what, "not a text file (control byte 0x%02x)", b);
+      throw cairn::sim::InputError(path, line, what);
+    }
+  }
   try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw cairn::sim::InputError(path, 0, "cannot open file");
+    root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw cairn::sim::InputError(path, e.mark.line + 1, e.msg);
   }
@@ -160,17 +179,28 @@ void applyConfig(const std::string& path, gs::SlamOptions& options) {
 struct LogScan {
   std::size_t lasers = 0;
   std::optional<gs::Pose2> mount;  ///< laser in base frame from the first FLASER with poses
+  std::size_t backwards = 0;       ///< scans (within the limit) stamped before an earlier scan
+  std::size_t first_backwards_line = 0;
 };
 
-// First pass over the log: the scan count (progress/ETA) and the laser mount. FLASER carries the laser pose
-// and the robot's odometry pose; their difference is the mount (FR079: 4 cm forward). Ignored if implausible.
-LogScan scanLog(const std::string& log, const cairn::sim::CarmenReaderOptions& opt) {
+// First pass over the log: the scan count (progress/ETA), the laser mount, and scans whose timestamp goes
+// backwards (counted over the scans the run will use: `limit`, -1 all). GraphSlam::addScan rejects such
+// scans; real logs have them (radish intel.clf: 217 of its first 1500), so they are reported, not fatal.
+// FLASER carries the laser pose and the robot's odometry pose; their difference is the mount (FR079: 4 cm
+// forward). Ignored if implausible.
+LogScan scanLog(const std::string& log, const cairn::sim::CarmenReaderOptions& opt, long limit) {
   cairn::sim::CarmenReader reader(log, opt);
   cairn::sim::CarmenRecord rec;
   LogScan out;
+  double previous = -std::numeric_limits<double>::infinity();
   while (reader.next(rec)) {
     const auto* laser = std::get_if<cairn::sim::CarmenLaser>(&rec);
     if (laser == nullptr) continue;
+    if (limit < 0 || static_cast<long>(out.lasers) < limit) {
+      if (laser->scan.stamp < previous && out.backwards++ == 0)
+        out.first_backwards_line = reader.lineNumber();
+      previous = std::max(previous, laser->scan.stamp);
+    }
     if (out.lasers++ == 0 && laser->has_pose) {
       const gs::Pose2 robot{{laser->robot_pose.x, laser->robot_pose.y}, laser->robot_pose.theta};
       const gs::Pose2 las{{laser->laser_pose.x, laser->laser_pose.y}, laser->laser_pose.theta};
@@ -216,8 +246,11 @@ int slamRunVerb(const std::vector<std::string>& args) {
         const auto eq = kv.find('=');
         if (eq == std::string::npos) throw std::invalid_argument("--set expects key=value, got '" + kv + "'");
         sets.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
-      } else if (a == "--limit") limit = cairn::slam_cli::parseInt(value(), "--limit");
-      else if (a == "--laser-mount") laser_mount = value();
+      } else if (a == "--limit") {
+        limit = cairn::slam_cli::parseInt(value(), "--limit");
+        if (limit < 1) throw std::invalid_argument("--limit must be >= 1 scan");
+      } else if (a == "--laser-mount")
+        laser_mount = value();
       else if (a == "--skip-malformed") skip_malformed = true;
       else if (a == "--json") json = true;
       else if (a == "--quiet") quiet = true;
@@ -240,7 +273,12 @@ int slamRunVerb(const std::vector<std::string>& args) {
     };
     const auto t0 = std::chrono::steady_clock::now();
     const std::clock_t cpu0 = std::clock();
-    const LogScan info = scanLog(log, ropt);
+    const LogScan info = scanLog(log, ropt, limit);
+    if (info.backwards > 0)
+      std::fprintf(stderr,
+                   "cairn: slam: warning: %s:%zu: scan timestamp before an earlier scan's (%zu such scans; "
+                   "SLAM rejects them)\n",
+                   log.c_str(), info.first_backwards_line, info.backwards);
     malformed_warnings = 0;
     std::size_t total = info.lasers;
     if (limit >= 0) total = std::min(total, static_cast<std::size_t>(limit));
@@ -249,7 +287,9 @@ int slamRunVerb(const std::vector<std::string>& args) {
     cairn::sim::CarmenReader reader(log, ropt);
     cairn::sim::CarmenRecord rec;
     std::size_t done = 0, rejected = 0;
-    double first_stamp = std::numeric_limits<double>::quiet_NaN(), last_stamp = first_stamp;
+    // Data duration: the span of the scan stamps (not last - first, which is negative when time goes
+    // backwards).
+    double first_stamp = std::numeric_limits<double>::infinity(), last_stamp = -first_stamp;
     auto last_print = t0;
     while (done < total && reader.next(rec)) {
       auto* laser = std::get_if<cairn::sim::CarmenLaser>(&rec);
@@ -257,8 +297,8 @@ int slamRunVerb(const std::vector<std::string>& args) {
       ++done;
       std::optional<gs::Pose2> odom;
       if (laser->has_pose) odom = gs::Pose2{{laser->robot_pose.x, laser->robot_pose.y}, laser->robot_pose.theta};
-      if (std::isnan(first_stamp)) first_stamp = laser->scan.stamp;
-      last_stamp = laser->scan.stamp;
+      first_stamp = std::min(first_stamp, laser->scan.stamp);
+      last_stamp = std::max(last_stamp, laser->scan.stamp);
       if (!slam.addScan(laser->scan, odom)) ++rejected;
       const auto now = std::chrono::steady_clock::now();
       if (!quiet && (now - last_print > std::chrono::milliseconds(250) || done == total)) {
@@ -271,6 +311,9 @@ int slamRunVerb(const std::vector<std::string>& args) {
     const double cpu = static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
     if (!quiet) std::fprintf(stderr, "\n");
     if (done == 0) return fail(log + ": no laser scans");
+    if (slam.nodes().empty())  // nothing to map (OpenCV would fail on the empty image)
+      return fail(log + ": none of the " + std::to_string(done) + " scans was accepted by SLAM (" +
+                  std::to_string(rejected) + " rejected: too few valid returns, or time going backwards)");
     const std::filesystem::path dir(out_dir);
     gs::writePoses((dir / "poses.txt").string(), slam.trajectory());
     gs::writeG2o(slam.graph(), (dir / "graph.g2o").string());
