@@ -184,6 +184,8 @@ TEST(CopaCli, RenderChecksMapYamlTimesAndArea) {
   EXPECT_EQ(err.rfind("cairn: " + dir + "/cli_map.yaml:", 0), 0u) << err;
   EXPECT_EQ(render("image: " + png + "\nresolution: 0.05\norigin: [-60, -40, 0]\nnegatee: 0\n", small), 2);
   EXPECT_EQ(err.rfind("cairn: " + dir + "/cli_map.yaml:4: unknown key 'negatee'", 0), 0u) << err;
+  EXPECT_EQ(render("image: " + png + "\nresolution: 0.05\norigin: [-60, -40, 0]\nresolution: 0.1\n", small), 2);
+  EXPECT_EQ(err.rfind("cairn: " + dir + "/cli_map.yaml:4: duplicate key 'resolution'", 0), 0u) << err;
   const std::string good = "image: " + png + "\nresolution: 0.05\norigin: [-60, -40, 0]\n";
   EXPECT_EQ(render(good, "--times '' --bbox 14,-12,16,-10"), 2);
   EXPECT_EQ(err.rfind("cairn: copa: --times needs at least one number\n", 0), 0u) << err;

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -41,10 +42,12 @@ MapImage loadMapYaml(const std::string& yaml_path) {
   double res = 0, occ_th = 0.65;
   int negate = 0;
   std::vector<double> origin;
+  std::set<std::string> seen;
   for (const auto& kv : root) {
     const std::string key = kv.first.Scalar();
     const YAML::Node& v = kv.second;
     const long ln = lineOf(kv.first);
+    if (!seen.insert(key).second) throw InputError(yaml_path, ln, "duplicate key '" + key + "'");
     if (key == "image") {
       if (!v.IsScalar() || v.Scalar().empty()) throw InputError(yaml_path, ln, "'image' expects a file name");
       image = v.Scalar();
