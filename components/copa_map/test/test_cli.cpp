@@ -128,6 +128,9 @@ TEST(CopaCli, EveryConfigValueIsRangeCheckedWithFileAndLine) {
   std::string err;
   EXPECT_EQ(trainWithConfigLine("max_iterations = 5 6", &err), 2);
   EXPECT_EQ(err, "cairn: " + dir + "/cli_range.txt:2: value of 'max_iterations' is not a number: '5 6'\n");
+  EXPECT_EQ(trainWithConfigLine("period_max = 1.5", &err), 2);  // below the default period_min 2
+  EXPECT_EQ(err, "cairn: " + dir +
+                     "/cli_range.txt:2: period_max must be 0 (half the data span) or >= period_min\n");
   EXPECT_EQ(trainWithConfigLine("gh_order = 1000000", &err), 2);
   EXPECT_EQ(err,
             "cairn: " + dir + "/cli_range.txt:2: value of 'gh_order' must be in [1, 100], got '1000000'\n");

@@ -175,7 +175,7 @@ std::string rangeText(const ConfigKey& k) {
 void applyConfig(const std::string& path, CopaMapConfig& mc, TrainConfig& tc) {
   std::ifstream in = openInputFile(path, "config file");
   std::string line;
-  long ln = 0;
+  long ln = 0, period_line = 0;  // last line setting period_min or period_max
   while (std::getline(in, line)) {
     ++ln;
     const auto hash = line.find('#');
@@ -208,8 +208,12 @@ void applyConfig(const std::string& path, CopaMapConfig& mc, TrainConfig& tc) {
       throw InputError(path, ln,
                        "value of '" + key + "' must be in " + rangeText(*k) + ", got '" + val + "'");
     k->set(v, mc, tc);
+    if (key == "period_min" || key == "period_max") period_line = ln;
   }
   if (in.bad()) throw InputError(path, ln, "read error");
+  const PeriodInitConfig& pi = mc.period_init;
+  if (pi.period_max > 0 && pi.period_max < pi.period_min)
+    throw InputError(path, period_line, "period_max must be 0 (half the data span) or >= period_min");
 }
 
 void progressBar(int it, double elbo, double secs, const TrainConfig& tc) {
