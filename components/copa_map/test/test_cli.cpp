@@ -131,6 +131,10 @@ TEST(CopaCli, EveryConfigValueIsRangeCheckedWithFileAndLine) {
   EXPECT_EQ(trainWithConfigLine("period_max = 1.5", &err), 2);  // below the default period_min 2
   EXPECT_EQ(err, "cairn: " + dir +
                      "/cli_range.txt:2: period_max must be 0 (half the data span) or >= period_min\n");
+  EXPECT_EQ(trainWithConfigLine("cell_size = 1e-300", &err),
+            2);  // cell indices floor(x / r_s) would overflow
+  EXPECT_EQ(err, "cairn: " + dir +
+                     "/cli_range.txt:2: value of 'cell_size' must be in [0.001, 1000000], got '1e-300'\n");
   EXPECT_EQ(trainWithConfigLine("gh_order = 1000000", &err), 2);
   EXPECT_EQ(err,
             "cairn: " + dir + "/cli_range.txt:2: value of 'gh_order' must be in [1, 100], got '1000000'\n");
