@@ -45,6 +45,17 @@ double numberArg(const std::string& verb, const std::string& option, const std::
   return d;
 }
 
+// A finite number in [lo, hi]; the range is in the message.
+double numberArg(const std::string& verb, const std::string& option, const std::string& v, double lo, double hi) {
+  const double d = numberArg(verb, option, v);
+  if (d < lo || d > hi) {
+    char range[64];
+    std::snprintf(range, sizeof range, "[%.15g, %.15g]", lo, hi);
+    usageError(verb + ": " + option + " expects a number in " + range + ", got '" + v + "'");
+  }
+  return d;
+}
+
 long long integerArg(const std::string& verb, const std::string& option, const std::string& v, long long lo,
                      long long hi) {
   char* end = nullptr;
@@ -56,6 +67,8 @@ long long integerArg(const std::string& verb, const std::string& option, const s
   return x;
 }
 constexpr long long kMaxSeed = LLONG_MAX;
+// Longest simulated span of `run` and `people` (about 3 years): keeps step and row counts far from overflow.
+constexpr double kMaxDuration = 1e8;
 
 void usage() {
   std::cout << "usage: cairn-sim <verb> [options]\n"
@@ -238,12 +251,11 @@ int cmdBench(int argc, char** argv) {
     };
     if (a == "--world") worlds.push_back(value());
     else if (a == "--json") json = true;
-    else if (a == "--seconds") seconds = numberArg("bench", a, value());
+    else if (a == "--seconds") seconds = numberArg("bench", a, value(), 0.001, 3600.0);
     else if (a == "--repeat") repeat = static_cast<int>(integerArg("bench", a, value(), 1, 1000000));
     else if (a == "--seed") seed = static_cast<std::uint64_t>(integerArg("bench", a, value(), 0, kMaxSeed));
     else usageError("bench: unknown option '" + a + "'");
   }
-  if (!(seconds > 0.0)) usageError("bench: --seconds must be > 0, got " + std::to_string(seconds));
   if (worlds.empty() || (worlds.size() == 1 && worlds[0] == "all")) worlds = shippedWorlds();
   std::vector<BenchResult> results;
   for (const auto& w : worlds) results.push_back(benchWorld(w, seconds, repeat, seed));
@@ -278,24 +290,33 @@ int cmdRun(int argc, char** argv) {
       if (i + 1 >= argc) usageError("run: " + a + " needs a value");
       return argv[++i];
     };
-    auto number = [&]() { return numberArg("run", a, value()); };
+    // ranges as the Simulator component's parameters (README), so that a run can be repeated in a launch
+    auto number = [&](double lo, double hi) { return numberArg("run", a, value(), lo, hi); };
     if (a == "--world") world_name = value();
-    else if (a == "--duration") duration = number();
+    else if (a == "--duration") duration = number(0.0, kMaxDuration);
     else if (a == "--seed") cfg.seed = static_cast<std::uint64_t>(integerArg("run", a, value(), 0, kMaxSeed));
     else if (a == "--out") out_dir = value();
     else if (a == "--route") route_name = value();
     else if (a == "--no-people") cfg.people = false;
     else if (a == "--no-crowd") cfg.crowd = false;
-    else if (a == "--realtime-factor") rtf = number();
-    else if (a == "--route-speed") rc.speed = number();
-    else if (a == "--dwell") rc.dwell = number();
-    else if (a == "--fov-deg") cfg.laser.fov = number() * std::numbers::pi / 180.0;
-    else if (a == "--resolution-deg") cfg.laser.resolution = number() * std::numbers::pi / 180.0;
-    else if (a == "--laser-rate") cfg.laser.rate = number();
-    else if (a == "--range-max") cfg.laser.range_max = number();
+    else if (a == "--realtime-factor") {
+      const std::string v = value();
+      rtf = numberArg("run", a, v);
+      if (rtf != 0.0 && !(rtf >= 0.01 && rtf <= 1000.0))
+        usageError("run: --realtime-factor expects 0 (as fast as possible) or a number in [0.01, 1000], got '" + v + "'");
+    }
+    else if (a == "--route-speed") rc.speed = number(0.01, 5.0);
+    else if (a == "--dwell") rc.dwell = number(0.0, 3600.0);
+    else if (a == "--fov-deg") cfg.laser.fov = number(1.0, 360.0) * std::numbers::pi / 180.0;
+    else if (a == "--resolution-deg") cfg.laser.resolution = number(0.05, 10.0) * std::numbers::pi / 180.0;
+    else if (a == "--laser-rate") cfg.laser.rate = number(0.1, 200.0);
+    else if (a == "--range-max") cfg.laser.range_max = number(0.1, 200.0);
     else usageError("run: unknown option '" + a + "'");
   }
   if (world_name.empty() || duration < 0 || out_dir.empty()) usageError("run: --world, --duration and --out are required");
+  if (cfg.laser.resolution > cfg.laser.fov) usageError("run: --resolution-deg must not exceed --fov-deg");
+  // The simulator scans at most once per physics step: above 100 Hz the step is one laser period.
+  if (cfg.laser.rate * cfg.physics_dt > 1.0) cfg.physics_dt = 1.0 / cfg.laser.rate;
   World world = loadWorld(resolveWorldPath(world_name));
   std::optional<std::vector<Vec2>> route;
   if (route_name.empty() && !world.routes.empty()) route_name = world.routes.begin()->first;
@@ -313,10 +334,14 @@ int cmdRun(int argc, char** argv) {
   char buf[256];
   std::uint64_t digest = 0xcbf29ce484222325ULL;
   long scans = 0;
+  // One chunk per laser period (at least one physics step). The run ends at the physics step nearest to
+  // `duration`, as Simulator::advance rounds: a remainder under half a step is not simulated (and cannot stall).
+  const double dt = cfg.physics_dt;
   const double chunk = 1.0 / cfg.laser.rate;
+  const long end_step = std::lround(duration / dt);
   const auto wall0 = std::chrono::steady_clock::now();
   SimOutput out;
-  while (sim.time() < duration - 1e-9) {
+  while (std::lround(sim.time() / dt) < end_step) {
     out.scans.clear();
     out.odometry.clear();
     out.ground_truth.clear();
@@ -359,14 +384,13 @@ int cmdPeople(int argc, char** argv) {
       return argv[++i];
     };
     if (a == "--world") world_name = value();
-    else if (a == "--duration") duration = numberArg("people", a, value());
-    else if (a == "--rate") rate = numberArg("people", a, value());
+    else if (a == "--duration") duration = numberArg("people", a, value(), 0.0, kMaxDuration);
+    else if (a == "--rate") rate = numberArg("people", a, value(), 1e-4, 1000.0);
     else if (a == "--seed") seed = static_cast<std::uint64_t>(integerArg("people", a, value(), 0, kMaxSeed));
     else if (a == "--out") out_file = value();
     else usageError("people: unknown option '" + a + "'");
   }
-  if (world_name.empty() || duration < 0 || out_file.empty() || !(rate > 0))
-    usageError("people: --world, --duration, --out (and --rate > 0) are required");
+  if (world_name.empty() || duration < 0 || out_file.empty()) usageError("people: --world, --duration and --out are required");
   const World world = loadWorld(resolveWorldPath(world_name));
   // Same stream as the full simulator's people (Simulator forks stream 3 from the seed).
   PeopleSimulator people(world, GaitConfig{}, Rng(seed).fork(3));
