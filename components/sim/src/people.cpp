@@ -396,7 +396,7 @@ void PeopleSimulator::spawnCrowd(double t0, double t1) {
       next_arrival_[s] = t - std::log(1.0 - rng_.uniform()) / peak;
       const double accept = rng_.uniform();
       const std::size_t sink_idx = static_cast<std::size_t>(rng_.uniform() * c.sinks.size());
-      const double speed = std::clamp(rng_.gaussian(c.speed, c.speed_sigma), 0.4, 2.0);
+      const double speed = std::clamp(rng_.gaussian(c.speed, c.speed_sigma), CrowdConfig::kMinSpeed, CrowdConfig::kMaxSpeed);
       if (accept * peak > c.rateAt(t)) continue;
       int active = 0;
       for (const auto& a : agents_) active += a.kind == Agent::Kind::Crowd && !a.done;

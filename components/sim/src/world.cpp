@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -172,6 +173,8 @@ void World::computeBounds() {
 // ---------------------------------------------------------------- YAML parsing
 namespace {
 
+constexpr double kMaxCrowdRate = 3600.0;  ///< people per hour per source at the peak (one a second)
+
 struct Parser {
   std::string file;
 
@@ -216,6 +219,29 @@ struct Parser {
     if (!(v > 0)) fail(n, "'" + path + key + "' must be > 0");
     return v;
   }
+  // A number in [lo, hi]; the range is in the message.
+  double inRange(const YAML::Node& n, const std::string& path, double lo, double hi) const {
+    const double v = num(n, path);
+    if (v < lo || v > hi) fail(n, "'" + path + "' must be in " + range(lo, hi) + ", got " + n.Scalar());
+    return v;
+  }
+  double inRange(const YAML::Node& map, const char* key, const std::string& path, double def, double lo, double hi) const {
+    const YAML::Node n = map[key];
+    return n ? inRange(n, path + key, lo, hi) : def;
+  }
+  int integer(const YAML::Node& map, const char* key, const std::string& path, int def, int lo, int hi) const {
+    const YAML::Node n = map[key];
+    if (!n) return def;
+    const double v = num(n, path + key);
+    if (v != std::floor(v) || v < lo || v > hi)
+      fail(n, "'" + path + key + "' must be an integer in " + range(lo, hi) + ", got " + n.Scalar());
+    return static_cast<int>(v);
+  }
+  static std::string range(double lo, double hi) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "[%.15g, %.15g]", lo, hi);
+    return buf;
+  }
   bool boolean(const YAML::Node& n, const std::string& path) const {
     try {
       return n.as<bool>();
@@ -228,11 +254,7 @@ struct Parser {
     return n.Scalar();
   }
   float reflectivity(const YAML::Node& map, const std::string& path, float def) const {
-    const YAML::Node n = map["reflectivity"];
-    if (!n) return def;
-    const double v = num(n, path + "reflectivity");
-    if (v < 0 || v > 1) fail(n, "'" + path + "reflectivity' must be in [0, 1]");
-    return static_cast<float>(v);
+    return static_cast<float>(inRange(map, "reflectivity", path, def, 0.0, 1.0));
   }
   Vec2 point(const YAML::Node& n, const std::string& path) const {
     if (!n.IsSequence() || n.size() != 2) fail(n, "'" + path + "' must be [x, y]");
@@ -319,9 +341,7 @@ struct Parser {
               "");
     w.name = root["name"] ? str(root["name"], "name")
                           : std::filesystem::path(file).stem().string();
-    const float wall_refl = root["wall_reflectivity"]
-                                ? static_cast<float>(num(root["wall_reflectivity"], "wall_reflectivity"))
-                                : 0.3F;
+    const float wall_refl = static_cast<float>(inRange(root, "wall_reflectivity", "", 0.3F, 0.0, 1.0));
     if (const auto n = root["walls"]) {
       if (!n.IsSequence()) fail(n, "'walls' must be a list of polylines");
       for (std::size_t i = 0; i < n.size(); ++i) {
@@ -337,7 +357,7 @@ struct Parser {
         if (!n[i].IsSequence() || (n[i].size() != 4 && n[i].size() != 5))
           fail(n[i], "'" + p + "' must be [x1, y1, x2, y2] or [x1, y1, x2, y2, reflectivity]");
         Segment s{{num(n[i][0], p), num(n[i][1], p)}, {num(n[i][2], p), num(n[i][3], p)}, wall_refl};
-        if (n[i].size() == 5) s.reflectivity = static_cast<float>(num(n[i][4], p));
+        if (n[i].size() == 5) s.reflectivity = static_cast<float>(inRange(n[i][4], p + "[4]", 0.0, 1.0));
         w.walls.push_back(s);
       }
     }
@@ -472,8 +492,9 @@ struct Parser {
       };
       c.sources = names("sources");
       c.sinks = names("sinks");
-      c.base_rate = num(need(n, "base_rate", p), p + "base_rate");
-      if (c.base_rate < 0) fail(n["base_rate"], "'" + p + "base_rate' must be >= 0");
+      // Arrivals are drawn at the peak rate: bounded so that a run cannot drown in candidates (and each
+      // draw advances time: at 1e300 per hour it did not, and the run hung).
+      c.base_rate = inRange(need(n, "base_rate", p), p + "base_rate", 0.0, kMaxCrowdRate);
       if (const auto t = n["terms"]) {
         if (!t.IsSequence()) fail(t, "'" + p + "terms' must be a list");
         for (std::size_t i = 0; i < t.size(); ++i) {
@@ -485,10 +506,15 @@ struct Parser {
           term.phase = num(t[i], "phase", tp, 0.0);
           c.terms.push_back(term);
         }
+        double peak = 1.0;
+        for (const auto& term : c.terms) peak += std::abs(term.amplitude);
+        if (c.base_rate * peak > kMaxCrowdRate)
+          fail(t, "'" + p + "terms': the peak rate base_rate × (1 + Σ|amplitude|) must be at most " +
+                      std::to_string(static_cast<int>(kMaxCrowdRate)) + " people per hour");
       }
-      c.speed = positive(n, "speed", p, c.speed);
-      c.speed_sigma = num(n, "speed_sigma", p, c.speed_sigma);
-      c.max_people = static_cast<int>(num(n, "max_people", p, c.max_people));
+      c.speed = inRange(n, "speed", p, c.speed, CrowdConfig::kMinSpeed, CrowdConfig::kMaxSpeed);
+      c.speed_sigma = inRange(n, "speed_sigma", p, c.speed_sigma, 0.0, 1.0);
+      c.max_people = integer(n, "max_people", p, c.max_people, 0, 1000);
       c.start_time = num(n, "start_time", p, c.start_time);
       w.crowd = c;
     }

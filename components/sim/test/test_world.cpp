@@ -147,6 +147,36 @@ TEST(WorldErrors, NameFileLineAndKey) {
             "w.yaml:4: 'furniture[0].size' must be positive");
 }
 
+TEST(WorldErrors, CrowdValuesAreRangeChecked) {
+  const std::string head = "walls:\n  - [[0,0],[1,0]]\nregions:\n  - {name: a, rect: [0,0,1,1]}\n"
+                           "crowd:\n  sources: [a]\n  sinks: [a]\n";
+  // base_rate 1e300 passed and then hung the run (each arrival draw added nothing to the time)
+  EXPECT_EQ(errorOf(head + "  base_rate: 1e300\n"), "w.yaml:8: 'crowd.base_rate' must be in [0, 3600], got 1e300");
+  EXPECT_EQ(errorOf(head + "  base_rate: 3000\n  terms: [{period: 86400, amplitude: 0.5}]\n"),
+            "w.yaml:9: 'crowd.terms': the peak rate base_rate × (1 + Σ|amplitude|) must be at most 3600 people per hour");
+  EXPECT_EQ(errorOf(head + "  base_rate: 1\n  max_people: -1\n"),
+            "w.yaml:9: 'crowd.max_people' must be an integer in [0, 1000], got -1");
+  EXPECT_EQ(errorOf(head + "  base_rate: 1\n  max_people: 2.5\n"),
+            "w.yaml:9: 'crowd.max_people' must be an integer in [0, 1000], got 2.5");
+  EXPECT_EQ(errorOf(head + "  base_rate: 1\n  max_people: 1e300\n"),
+            "w.yaml:9: 'crowd.max_people' must be an integer in [0, 1000], got 1e300");
+  EXPECT_EQ(errorOf(head + "  base_rate: 1\n  speed: 5\n"), "w.yaml:9: 'crowd.speed' must be in [0.4, 2], got 5");
+  EXPECT_EQ(errorOf(head + "  base_rate: 1\n  speed_sigma: -0.1\n"),
+            "w.yaml:9: 'crowd.speed_sigma' must be in [0, 1], got -0.1");
+  EXPECT_EQ(errorOf(head + "  base_rate: 3600\n  max_people: 1000\n"), "no error");
+}
+
+TEST(WorldErrors, ReflectivitiesAreInZeroOne) {
+  // doors, furniture and markers were checked; walls and segments were not
+  EXPECT_EQ(errorOf("wall_reflectivity: -5\nwalls:\n  - [[0,0],[1,0]]\n"),
+            "w.yaml:1: 'wall_reflectivity' must be in [0, 1], got -5");
+  EXPECT_EQ(errorOf("wall_reflectivity: 7\nwalls:\n  - [[0,0],[1,0]]\n"),
+            "w.yaml:1: 'wall_reflectivity' must be in [0, 1], got 7");
+  EXPECT_EQ(errorOf("segments:\n  - [0, 0, 1, 0, -3]\n"), "w.yaml:2: 'segments[0][4]' must be in [0, 1], got -3");
+  EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\nmarkers:\n  - {position: [0, 0], reflectivity: 2}\n"),
+            "w.yaml:4: 'markers[0].reflectivity' must be in [0, 1], got 2");
+}
+
 TEST(Occupancy, SinglePixelGivesUnitSquare) {
   OccupancyImage img{3, 3, std::vector<std::uint8_t>(9, 255)};
   img.pixels[1 * 3 + 2] = 0;  // row 1 (middle), column 2

@@ -115,6 +115,8 @@ struct CrowdConfig {
   std::vector<std::string> sinks;    ///< region names (goal chosen uniformly)
   double base_rate = 0.0;            ///< people per hour at each source
   std::vector<RateTerm> terms;       ///< rate(t) = base * max(0, 1 + sum a cos(2 pi (t - phase) / period))
+  /// Walking speeds are drawn from N(speed, speed_sigma) clamped to [kMinSpeed, kMaxSpeed] m/s.
+  static constexpr double kMinSpeed = 0.4, kMaxSpeed = 2.0;
   double speed = 1.1;
   double speed_sigma = 0.15;
   int max_people = 30;
