@@ -14,6 +14,17 @@
 namespace cairn::sim {
 namespace {
 
+// Larger images are refused before anything is allocated (about 20000 x 20000 pixels: 1 km square at 5 cm).
+constexpr long long kMaxImagePixels = 400'000'000;
+
+void checkImageSize(const std::string& path, long long width, long long height) {
+  if (width <= 0 || height <= 0 || width > 100000 || height > 100000)
+    throw InputError(path, 0, "bad image size " + std::to_string(width) + " x " + std::to_string(height));
+  if (width * height > kMaxImagePixels)
+    throw InputError(path, 0, "image of " + std::to_string(width) + " x " + std::to_string(height) +
+                                  " pixels is larger than " + std::to_string(kMaxImagePixels) + " pixels");
+}
+
 OccupancyImage readPgm(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, "cannot open image");
@@ -41,14 +52,24 @@ OccupancyImage readPgm(const std::string& path) {
   img.width = static_cast<int>(token());
   img.height = static_cast<int>(token());
   const long maxval = token();
-  if (img.width <= 0 || img.height <= 0 || img.width > 100000 || img.height > 100000)
-    throw InputError(path, 0, "bad PGM size");
+  checkImageSize(path, img.width, img.height);
   if (maxval <= 0 || maxval > 65535) throw InputError(path, 0, "bad PGM maxval");
   const std::size_t n = static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.height);
+  if (magic == "P5") in.get();  // single whitespace after maxval
+  const int bytes = maxval > 255 ? 2 : 1;
+  // The header's size against the data the file has, before allocating: binary pixels take `bytes` each,
+  // text pixels at least two characters (a digit and a separator) but the last.
+  const std::streamoff data_start = in.tellg();
+  in.seekg(0, std::ios::end);
+  const std::streamoff data_size = in.tellg() - data_start;
+  in.seekg(data_start);
+  const std::size_t needed = magic == "P5" ? n * static_cast<std::size_t>(bytes) : 2 * n - 1;
+  if (data_start < 0 || data_size < 0 || static_cast<std::size_t>(data_size) < needed)
+    throw InputError(path, 0, "truncated PGM data: the header says " + std::to_string(img.width) + " x " +
+                                  std::to_string(img.height) + " pixels, the file has " +
+                                  std::to_string(std::max<std::streamoff>(data_size, 0)) + " data bytes");
   img.pixels.resize(n);
   if (magic == "P5") {
-    in.get();  // single whitespace after maxval
-    const int bytes = maxval > 255 ? 2 : 1;
     std::vector<unsigned char> raw(n * static_cast<std::size_t>(bytes));
     if (!in.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(raw.size())))
       throw InputError(path, 0, "truncated PGM data");
@@ -74,6 +95,12 @@ OccupancyImage readPng(const std::string& path) {
   if (!png_image_begin_read_from_file(&image, path.c_str()))
     throw InputError(path, 0, std::string("cannot read PNG: ") + image.message);
   image.format = PNG_FORMAT_GRAY;
+  try {
+    checkImageSize(path, image.width, image.height);  // a few compressed bytes can claim any size
+  } catch (...) {
+    png_image_free(&image);
+    throw;
+  }
   OccupancyImage img;
   img.width = static_cast<int>(image.width);
   img.height = static_cast<int>(image.height);

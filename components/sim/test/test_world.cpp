@@ -250,6 +250,30 @@ TEST(Occupancy, MapServerYamlWithPgmAndPng) {
   }
 }
 
+TEST(Occupancy, PgmHeaderSizeIsCheckedAgainstTheFileBeforeAllocating) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "cairn_sim_test_world_pgm";
+  fs::create_directories(dir);
+  auto errorFor = [&](const std::string& name, const std::string& bytes) -> std::string {
+    std::ofstream(dir / name, std::ios::binary) << bytes;
+    try {
+      readImage((dir / name).string());
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  const std::string p = dir.string() + "/";
+  // 10^10 pixels claimed, 2 bytes present: this allocated until the process was killed
+  EXPECT_EQ(errorFor("big.pgm", std::string("P5\n100000 100000\n255\n") + std::string(2, '\0')),
+            p + "big.pgm:0: image of 100000 x 100000 pixels is larger than 400000000 pixels");
+  EXPECT_EQ(errorFor("p5.pgm", std::string("P5\n10000 10000\n255\n") + std::string(2, '\0')),
+            p + "p5.pgm:0: truncated PGM data: the header says 10000 x 10000 pixels, the file has 2 data bytes");
+  EXPECT_EQ(errorFor("p2.pgm", "P2\n3 3\n255\n0 0 0\n"),
+            p + "p2.pgm:0: truncated PGM data: the header says 3 x 3 pixels, the file has 7 data bytes");
+  EXPECT_EQ(errorFor("ok.pgm", "P2\n2 1\n255\n0 255"), "no error");
+}
+
 TEST(World, ShippedWorldsMatchTheirSpecification) {
   for (const auto& name : shippedWorlds()) {
     const World w = loadWorld(resolveWorldPath(name));
