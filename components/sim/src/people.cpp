@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <numbers>
@@ -61,6 +62,8 @@ std::vector<Trajectory> group(std::map<int, Trajectory>& by_id) {
 }
 
 std::ifstream openOrThrow(const std::string& path) {
+  // a directory opens as a stream that reads nothing: it would pass as a file without trajectories
+  if (std::filesystem::is_directory(path)) throw InputError(path, 0, "is a directory, not a file");
   std::ifstream in(path);
   if (!in) throw InputError(path, 0, "cannot open file");
   return in;
@@ -138,15 +141,42 @@ std::vector<Trajectory> loadEdinburghTracks(const std::string& path, double fram
     } catch (const std::exception&) {
       throw InputError(path, lineno, "bad TRACK id");
     }
-    std::string body = line.substr(eq + 1);
-    for (char& c : body)
-      if (c == '[' || c == ']' || c == ';') c = ' ';
-    std::stringstream ss(body);
+    // [[x y t];[x y t];...] with an optional ';' at the end; anything else (a cut-off line) is an error
+    const std::string name = "TRACK.R" + std::to_string(id);
+    const char* c = line.c_str() + eq + 1;
+    auto skip = [&] {
+      while (*c == ' ' || *c == '\t' || *c == '\r') ++c;
+    };
+    auto expect = [&](char want, const char* what) {
+      skip();
+      if (*c != want) throw InputError(path, lineno, name + ": " + what + (*c ? "" : " (line cut off?)"));
+      ++c;
+    };
     std::vector<double> nums;
-    double v;
-    while (ss >> v) nums.push_back(v);
-    if (!ss.eof()) throw InputError(path, lineno, "non-numeric value in TRACK.R" + std::to_string(id));
-    if (nums.empty() || nums.size() % 3 != 0) throw InputError(path, lineno, "TRACK entries must be [x y t] triples");
+    expect('[', "expected '[[x y t];...]'");
+    for (;;) {
+      expect('[', "expected '[x y t]'");
+      for (int k = 0; k < 3; ++k) {
+        skip();
+        char* e = nullptr;
+        const double v = std::strtod(c, &e);
+        if (e == c || !std::isfinite(v)) throw InputError(path, lineno, "non-numeric value in " + name);
+        nums.push_back(v);
+        c = e;
+      }
+      expect(']', "TRACK entries must be [x y t] triples");
+      skip();
+      if (*c == ';') {
+        ++c;
+        continue;
+      }
+      expect(']', "expected ';' or ']' after [x y t]");
+      break;
+    }
+    skip();
+    if (*c == ';') ++c;
+    skip();
+    if (*c) throw InputError(path, lineno, name + ": unexpected text after the track");
     Trajectory& tr = by_id[id];
     for (std::size_t i = 0; i < nums.size(); i += 3) {
       tr.p.push_back({nums[i] * mpp, nums[i + 1] * mpp});
@@ -154,6 +184,26 @@ std::vector<Trajectory> loadEdinburghTracks(const std::string& path, double fram
     }
   }
   return group(by_id);
+}
+
+std::vector<Trajectory> loadPeopleSource(const PeopleSource& src) {
+  std::vector<Trajectory> trajs;
+  const char* expected = "";
+  if (src.kind == "csv") {
+    trajs = loadTrajectoriesCsv(src.file);
+    expected = "t,id,x,y lines";
+  } else if (src.kind == "eth_obsmat") {
+    trajs = src.frame_period > 0 ? loadEthObsmat(src.file, src.frame_period) : loadEthObsmat(src.file);
+    expected = "ETH/UCY obsmat lines";
+  } else if (src.kind == "edinburgh") {
+    trajs = src.frame_period > 0 ? loadEdinburghTracks(src.file, src.frame_period) : loadEdinburghTracks(src.file);
+    expected = "Edinburgh TRACK.R<id>=[[x y t];...] lines";
+  } else {
+    throw InputError(src.file, 0, "unknown people source kind '" + src.kind + "'");
+  }
+  if (trajs.empty()) throw InputError(src.file, 0, "no trajectories (kind " + src.kind + ": expected " + expected + ")");
+  transformTrajectories(trajs, src.offset, src.scale, src.time_offset);
+  return trajs;
 }
 
 void transformTrajectories(std::vector<Trajectory>& trajs, const Pose2& offset, double scale, double time_offset) {
@@ -313,13 +363,7 @@ PeopleSimulator::PeopleSimulator(const World& world, GaitConfig gait, Rng rng, b
       addScripted(src.waypoints, src.speed, src.start_time);
       continue;
     }
-    std::vector<Trajectory> trajs;
-    if (src.kind == "csv") trajs = loadTrajectoriesCsv(src.file);
-    else if (src.kind == "eth_obsmat") trajs = src.frame_period > 0 ? loadEthObsmat(src.file, src.frame_period) : loadEthObsmat(src.file);
-    else if (src.kind == "edinburgh")
-      trajs = src.frame_period > 0 ? loadEdinburghTracks(src.file, src.frame_period) : loadEdinburghTracks(src.file);
-    transformTrajectories(trajs, src.offset, src.scale, src.time_offset);
-    addTrajectories(std::move(trajs), src.loop);
+    addTrajectories(loadPeopleSource(src), src.loop);
   }
   if (crowd_) free_ = std::make_unique<FreeSpaceGrid>(world);
 }

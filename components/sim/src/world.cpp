@@ -465,6 +465,8 @@ struct Parser {
         } else if (s.kind == "csv" || s.kind == "eth_obsmat" || s.kind == "edinburgh") {
           s.file = resolve(str(need(n[i], "file", p), p + "file"));
           if (!std::filesystem::exists(s.file)) fail(n[i]["file"], "'" + p + "file': no such file '" + s.file + "'");
+          if (std::filesystem::is_directory(s.file))
+            fail(n[i]["file"], "'" + p + "file': '" + s.file + "' is a directory, not a file");
           if (n[i]["offset"]) s.offset = pose(n[i]["offset"], p + "offset");
           s.scale = positive(n[i], "scale", p, 1.0);
           s.time_offset = num(n[i], "time_offset", p, 0.0);

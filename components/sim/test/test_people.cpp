@@ -88,6 +88,49 @@ TEST(Trajectories, EdinburghExcerpt) {
   EXPECT_EQ(trajs[0].t.size(), 53u);  // Properties.R1: 53 points
 }
 
+TEST(Trajectories, EdinburghTruncatedOrWrongFilesAreErrors) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "cairn_sim_test_people_edinburgh";
+  fs::create_directories(dir);
+  auto errorOf = [&](const std::string& name, const std::string& text, const std::string& kind) -> std::string {
+    std::ofstream(dir / name) << text;
+    PeopleSource src;
+    src.kind = kind;
+    src.file = (dir / name).string();
+    try {
+      loadPeopleSource(src);
+    } catch (const InputError& e) {
+      return std::string(e.what()).substr(dir.string().size() + 1);
+    }
+    return "no error";
+  };
+  // a cut-off last line used to be read as the triples it had
+  EXPECT_EQ(errorOf("cut.txt", " TRACK.R1=[[1 2 3];[4 5 6\n", "edinburgh"),
+            "cut.txt:1: TRACK.R1: TRACK entries must be [x y t] triples (line cut off?)");
+  EXPECT_EQ(errorOf("open.txt", " TRACK.R1=[[1 2 3];[4 5 6]\n", "edinburgh"),
+            "open.txt:1: TRACK.R1: expected ';' or ']' after [x y t] (line cut off?)");
+  EXPECT_EQ(errorOf("four.txt", " TRACK.R1=[[1 2 3 4]];\n", "edinburgh"),
+            "four.txt:1: TRACK.R1: TRACK entries must be [x y t] triples");
+  EXPECT_EQ(errorOf("ok.txt", " TRACK.R1=[[1 2 3];[4 5 6]];\n TRACK.R2=[[1 2 3]]\n", "edinburgh"), "no error");
+  // the wrong kind for a file used to give no people and no error
+  EXPECT_EQ(errorOf("walkers.csv", "t,id,x,y\n0,1,0,0\n", "edinburgh"),
+            "walkers.csv:0: no trajectories (kind edinburgh: expected Edinburgh TRACK.R<id>=[[x y t];...] lines)");
+  EXPECT_EQ(errorOf("empty.csv", "t,id,x,y\n", "csv"), "empty.csv:0: no trajectories (kind csv: expected t,id,x,y lines)");
+  // a directory opened as an empty stream
+  fs::create_directories(dir / "adir");
+  for (const char* kind : {"csv", "eth_obsmat", "edinburgh"}) {
+    PeopleSource src;
+    src.kind = kind;
+    src.file = (dir / "adir").string();
+    try {
+      loadPeopleSource(src);
+      ADD_FAILURE() << kind << ": no error for a directory";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()), src.file + ":0: is a directory, not a file");
+    }
+  }
+}
+
 TEST(Trajectories, TransformOffsetScale) {
   std::vector<Trajectory> t{{1, {0.0}, {{1.0, 0.0}}}};
   transformTrajectories(t, {10, 0, kPi / 2}, 2.0, 5.0);
@@ -208,6 +251,12 @@ TEST(PeopleSimulator, WorldPeopleSectionWithRecordedEthData) {
   }
   EXPECT_GE(max_people, 3u);
   EXPECT_THROW(parseWorld("walls: [[[0,0],[1,0]]]\npeople: [{kind: csv, file: nothere.csv}]\n", "/tmp/x.yaml"), InputError);
+  try {
+    parseWorld("walls: [[[0,0],[1,0]]]\npeople: [{kind: csv, file: /tmp}]\n", "x.yaml");
+    ADD_FAILURE() << "a directory was accepted as a people file";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "x.yaml:2: 'people[0].file': '/tmp' is a directory, not a file");
+  }
 }
 
 TEST(FreeSpace, ClosedDoorsBlockPlanning) {

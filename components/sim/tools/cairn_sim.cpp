@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "cairn/sim/laser.hpp"
+#include "cairn/sim/people.hpp"
 #include "cairn/sim/raycast.hpp"
 #include "cairn/sim/rng.hpp"
 #include "cairn/sim/simulator.hpp"
@@ -417,6 +418,9 @@ int cmdPeople(int argc, char** argv) {
 int cmdCheck(int argc, char** argv) {
   if (argc != 1) usageError("check: expected one world name or file");
   const World w = loadWorld(resolveWorldPath(argv[0]));
+  // recorded people files are read as `run` reads them, so that a malformed one fails here too
+  for (const auto& src : w.people)
+    if (!src.file.empty()) loadPeopleSource(src);
   std::printf("%s: %zu wall segments, %zu regions, %zu doors, %zu furniture, %zu markers, %zu routes, bounds "
               "[%.2f, %.2f] x [%.2f, %.2f]\n",
               w.name.c_str(), w.walls.size(), w.regions.size(), w.doors.size(), w.furniture.size(), w.markers.size(),

@@ -70,6 +70,9 @@ std::vector<Trajectory> loadEthObsmat(const std::string& path, double frame_peri
 /// (default 1/9 s); returned in metres and seconds.
 std::vector<Trajectory> loadEdinburghTracks(const std::string& path, double frame_period = 1.0 / 9.0,
                                             double metres_per_pixel = 0.0247);
+/// The trajectories of a recorded people source (csv, eth_obsmat, edinburgh) of a world, placed by its offset,
+/// scale and time offset. A file without any trajectory (e.g. the wrong `kind`) throws InputError too.
+std::vector<Trajectory> loadPeopleSource(const PeopleSource& source);
 /// world = offset ⊕ (scale * p), t + time_offset.
 void transformTrajectories(std::vector<Trajectory>& trajs, const Pose2& offset, double scale, double time_offset);
 
