@@ -305,6 +305,7 @@ struct Parser {
     std::string base = "map.";
     if (n.IsScalar()) {  // path to a ROS map_server YAML
       mfile = resolve(n.Scalar());
+      if (std::filesystem::is_directory(mfile)) fail(n, "map file '" + mfile + "' is a directory, not a file");
       try {
         m = YAML::LoadFile(mfile);
       } catch (const YAML::BadFile&) {
@@ -317,11 +318,16 @@ struct Parser {
     Parser sub{mfile};
     sub.checkKeys(m, {"image", "resolution", "origin", "occupied_thresh", "free_thresh", "negate", "mode"}, base);
     const std::string image = sub.resolve(sub.str(sub.need(m, "image", base), base + "image"));
-    const double res = sub.positive(m, "resolution", base, 0.0);
-    if (res <= 0) sub.fail(m, "missing key '" + base + "resolution'");
+    const double res = sub.inRange(sub.need(m, "resolution", base), base + "resolution", 0.001, 100.0);  // m per pixel
     const Pose2 origin = sub.pose(sub.need(m, "origin", base), base + "origin");
-    const double occ = sub.num(m, "occupied_thresh", base, 0.65);
-    const bool negate = m["negate"] ? sub.num(m["negate"], base + "negate") != 0.0 : false;
+    const double occ = sub.inRange(m, "occupied_thresh", base, 0.65, 0.0, 1.0);
+    sub.inRange(m, "free_thresh", base, 0.196, 0.0, 1.0);  // map_server's; not used here
+    const bool negate = sub.integer(m, "negate", base, 0, 0, 1) != 0;
+    if (const auto mode = m["mode"]) {
+      const std::string v = sub.str(mode, base + "mode");
+      if (v != "trinary" && v != "scale" && v != "raw")
+        sub.fail(mode, "'" + base + "mode' must be trinary, scale or raw, got '" + v + "'");
+    }
     OccupancyImage img;
     try {
       img = readImage(image);

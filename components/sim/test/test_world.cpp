@@ -274,6 +274,37 @@ TEST(Occupancy, PgmHeaderSizeIsCheckedAgainstTheFileBeforeAllocating) {
   EXPECT_EQ(errorFor("ok.pgm", "P2\n2 1\n255\n0 255"), "no error");
 }
 
+TEST(Occupancy, MapServerValuesAreRangeChecked) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "cairn_sim_test_world_map_values";
+  fs::create_directories(dir);
+  std::ofstream(dir / "m.pgm") << "P2\n2 1\n255\n0 255\n";
+  auto errorWith = [&](const std::string& line) -> std::string {
+    std::ofstream(dir / "m.yaml") << "image: m.pgm\norigin: [0, 0, 0]\n" << line << "\n";
+    try {
+      parseWorld("map: " + (dir / "m.yaml").string() + "\n", "w.yaml");
+    } catch (const InputError& e) {
+      return std::string(e.what()).substr(dir.string().size() + 1);
+    }
+    return "no error";
+  };
+  // were accepted (occupied_thresh 2: every pixel free, reported as "no geometry"; negate 5 as 1)
+  EXPECT_EQ(errorWith("resolution: 0.05\noccupied_thresh: 2"), "m.yaml:4: 'occupied_thresh' must be in [0, 1], got 2");
+  EXPECT_EQ(errorWith("resolution: 0.05\noccupied_thresh: -1"), "m.yaml:4: 'occupied_thresh' must be in [0, 1], got -1");
+  EXPECT_EQ(errorWith("resolution: 0.05\nfree_thresh: 3"), "m.yaml:4: 'free_thresh' must be in [0, 1], got 3");
+  EXPECT_EQ(errorWith("resolution: 0.05\nnegate: 5"), "m.yaml:4: 'negate' must be an integer in [0, 1], got 5");
+  EXPECT_EQ(errorWith("resolution: 1e-300"), "m.yaml:3: 'resolution' must be in [0.001, 100], got 1e-300");
+  EXPECT_EQ(errorWith("resolution: 0.05\nmode: bogus"), "m.yaml:4: 'mode' must be trinary, scale or raw, got 'bogus'");
+  EXPECT_EQ(errorWith("resolution: 0.05\nnegate: 1\nmode: trinary\nfree_thresh: 0.2"), "no error");
+  // a directory as the map file gave a raw "basic_filebuf::underflow" error without a place
+  try {
+    parseWorld("name: x\nmap: " + dir.string() + "\n", "w.yaml");
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "w.yaml:2: map file '" + dir.string() + "' is a directory, not a file");
+  }
+}
+
 TEST(World, ShippedWorldsMatchTheirSpecification) {
   for (const auto& name : shippedWorlds()) {
     const World w = loadWorld(resolveWorldPath(name));
