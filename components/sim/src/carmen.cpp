@@ -5,6 +5,7 @@
 #endif
 #include <zlib.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -168,25 +169,75 @@ class CarmenReader::Source {
 };
 
 namespace {
-class GzSource : public CarmenReader::Source {  // zlib also reads plain files transparently
+// gzip (any number of members, as `cat a.gz b.gz` gives) or a plain file. Inflated here rather than with
+// gzread, which reads a stream cut off at a flush point, or without its trailer, as a shorter file without
+// an error: a log must end with a complete member (CRC and length checked by zlib).
+class GzSource : public CarmenReader::Source {
  public:
-  explicit GzSource(const std::string& path) : path_(path), f_(gzopen(path.c_str(), "rb")) {
+  explicit GzSource(const std::string& path) : path_(path), f_(std::fopen(path.c_str(), "rb")), in_(1 << 17) {
     if (!f_) throw InputError(path, 0, "cannot open log");
-    gzbuffer(f_, 1 << 17);
-  }
-  ~GzSource() override { gzclose(f_); }
-  std::size_t read(char* buf, std::size_t n) override {
-    const int r = gzread(f_, buf, static_cast<unsigned>(n));
-    if (r < 0) {
-      int err = 0;
-      throw InputError(path_, 0, std::string("gzip: ") + gzerror(f_, &err));
+    gzip_ = fill() && zs_.avail_in >= 2 && in_[0] == 0x1f && in_[1] == 0x8b;
+    if (gzip_ && inflateInit2(&zs_, 15 + 16) != Z_OK) {  // 16: gzip wrapper only
+      std::fclose(f_);
+      throw InputError(path, 0, "gzip: cannot start decoding");
     }
-    return static_cast<std::size_t>(r);
+  }
+  ~GzSource() override {
+    if (gzip_) inflateEnd(&zs_);
+    std::fclose(f_);
+  }
+  std::size_t read(char* buf, std::size_t n) override {
+    const uInt want = static_cast<uInt>(std::min<std::size_t>(n, 1u << 30));
+    if (!gzip_) {  // plain text: what was read to look for the magic first
+      std::size_t got = std::min<std::size_t>(want, zs_.avail_in);
+      std::memcpy(buf, zs_.next_in, got);
+      zs_.next_in += got;
+      zs_.avail_in -= static_cast<uInt>(got);
+      if (got < want) {
+        got += std::fread(buf + got, 1, want - got, f_);
+        if (std::ferror(f_)) throw InputError(path_, 0, "read error");
+      }
+      return got;
+    }
+    zs_.next_out = reinterpret_cast<Bytef*>(buf);
+    zs_.avail_out = want;
+    while (zs_.avail_out == want) {
+      if (member_done_) {
+        // after a member: the end of the file (zero padding allowed, as gzip allows it) or another member
+        for (;;) {
+          if (zs_.avail_in == 0 && !fill()) return 0;
+          if (*zs_.next_in != 0) break;
+          ++zs_.next_in;
+          --zs_.avail_in;
+        }
+        if (*zs_.next_in != 0x1f) throw InputError(path_, 0, "gzip: data after the end of the compressed stream");
+        inflateReset(&zs_);
+        member_done_ = false;
+      }
+      if (zs_.avail_in == 0 && !fill())
+        throw InputError(path_, 0, "gzip: truncated data (the compressed stream ends before its end marker)");
+      const int r = inflate(&zs_, Z_NO_FLUSH);
+      if (r == Z_STREAM_END) member_done_ = true;
+      else if (r != Z_OK && r != Z_BUF_ERROR)
+        throw InputError(path_, 0, std::string("gzip: corrupt data") + (zs_.msg ? std::string(": ") + zs_.msg : ""));
+    }
+    return want - zs_.avail_out;
   }
 
  private:
+  bool fill() {  // more compressed input; false at the end of the file
+    const std::size_t got = std::fread(in_.data(), 1, in_.size(), f_);
+    if (std::ferror(f_)) throw InputError(path_, 0, "read error");
+    zs_.next_in = in_.data();
+    zs_.avail_in = static_cast<uInt>(got);
+    return got > 0;
+  }
+
   std::string path_;
-  gzFile f_;
+  FILE* f_;
+  std::vector<Bytef> in_;
+  z_stream zs_{};
+  bool gzip_ = false, member_done_ = false;
 };
 
 #if CAIRN_SIM_HAVE_BZIP2

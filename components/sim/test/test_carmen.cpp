@@ -6,6 +6,7 @@
 #include <numbers>
 #include <unistd.h>
 #include <vector>
+#include <zlib.h>
 
 #include "cairn/sim/carmen.hpp"
 #include "cairn/sim/log_playback.hpp"
@@ -158,6 +159,55 @@ TEST(CarmenReader, ExcerptPlainGzipBzip2GiveTheSameRecords) {
   }
   EXPECT_EQ(reader.stats().lines, 60u);
   EXPECT_EQ(reader.stats().skipped, 13u);
+}
+
+namespace {
+// gzip of `text`; finish = false stops at a sync flush (complete deflate blocks, no end block, no trailer).
+std::string gzipOf(const std::string& text, bool finish) {
+  z_stream zs{};
+  EXPECT_EQ(deflateInit2(&zs, 6, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY), Z_OK);
+  std::string out(text.size() + 1024, '\0');
+  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(text.data()));
+  zs.avail_in = static_cast<uInt>(text.size());
+  zs.next_out = reinterpret_cast<Bytef*>(out.data());
+  zs.avail_out = static_cast<uInt>(out.size());
+  EXPECT_EQ(deflate(&zs, finish ? Z_FINISH : Z_SYNC_FLUSH), finish ? Z_STREAM_END : Z_OK);
+  out.resize(zs.total_out);
+  deflateEnd(&zs);
+  return out;
+}
+std::string readError(const std::string& path) {
+  try {
+    readAll(path);
+  } catch (const InputError& e) {
+    return e.message();
+  }
+  return "no error";
+}
+}  // namespace
+
+TEST(CarmenReader, CutOffGzipIsAnErrorNotAShorterLog) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "cairn_sim_test_carmen_gzip";
+  fs::create_directories(dir);
+  auto write = [&](const char* name, const std::string& bytes) {
+    std::ofstream(dir / name, std::ios::binary) << bytes;
+    return (dir / name).string();
+  };
+  const std::string log = "ODOM 0 0 0 0 0 0 1.0 h 1.0\nODOM 1 0 0 0 0 0 2.0 h 2.0\n";
+  const std::string full = gzipOf(log, true);
+  // these were all read without an error: as the first record only, or as an empty log
+  const std::string cut = "gzip: truncated data (the compressed stream ends before its end marker)";
+  EXPECT_EQ(readError(write("flush.gz", gzipOf(log, false))), cut);
+  EXPECT_EQ(readError(write("no_trailer.gz", full.substr(0, full.size() - 8))), cut);
+  EXPECT_EQ(readError(write("magic_only.gz", full.substr(0, 2))), cut);
+  EXPECT_EQ(readError(write("header_only.gz", full.substr(0, 10))), cut);
+  EXPECT_EQ(readError(write("trailing.gz", full + "ODOM 2 0 0 0 0 0 3.0 h 3.0\n")),
+            "gzip: data after the end of the compressed stream");
+  EXPECT_EQ(readError(write("garbage.gz", "\x1f\x8bnot deflate data at all\n")).rfind("gzip: corrupt data", 0), 0u);
+  // concatenated members (cat a.gz b.gz) and zero padding after the last member are complete logs
+  EXPECT_EQ(readAll(write("two.gz", full + full)).odoms, 4);
+  EXPECT_EQ(readAll(write("padded.gz", full + std::string(512, '\0'))).odoms, 2);
 }
 
 TEST(CarmenReader, CorrectedLogWithNeffLines) {
