@@ -655,6 +655,21 @@ TEST(LogPlayCli, ABadLogIsOneErrorLineNamingFileAndLineAndExitCode2) {
   EXPECT_NE(out.find("bad_log.clf:3:"), std::string::npos) << out;
 }
 
+TEST(LogPlayCli, AnUnknownParameterIsOneErrorLineAndNothingPlays) {
+  // -p with a name LogPlayer does not declare used to be ignored (exit 0, the log played)
+  const std::string log = kRoot + "/test/data/carmen/aces_head60.clf";
+  const std::string cmd = std::string(CAIRN_LOG_EXE) + " play " + log + " --limit 3 -p foo:=1 2>&1";
+  FILE* f = ::popen(cmd.c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  std::string out;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, f) != nullptr) out += buf;
+  const int status = ::pclose(f);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_EQ(out.rfind("cairn: cairn-log: -p foo: cairn_sim::LogPlayer has no such parameter (declared: ", 0), 0u) << out;
+}
+
 TEST(LogPlayerComponent, BadLogsAreLoadErrorsNamingFileAndLine) {
   cairn::ComponentLoader loader;
   auto ctx = cairn::Context::create();

@@ -125,6 +125,14 @@ int publish(const std::string& path, bool skip_malformed, const PlayOptions& p) 
     return 2;
   }
   const auto player = std::static_pointer_cast<cairn_sim::LogPlayer>(mgr.get(loaded.unique_id));
+  // -p names the component does not declare (a typo would otherwise be ignored), checked before anything plays
+  if (const auto unused = player->parameters().unused_overrides(); !unused.empty()) {
+    std::string declared;
+    for (const auto& d : player->parameters().names()) declared += (declared.empty() ? "" : ", ") + d;
+    std::cerr << "cairn: cairn-log: -p " << unused.front() << ": cairn_sim::LogPlayer has no such parameter (declared: "
+              << declared << ")\n";
+    return 2;
+  }
   while (!g_stop && !player->finished()) exec.spin_until([&] { return g_stop.load() || player->finished(); }, std::chrono::seconds(1));
   // Reliable subscribers get what was published before the process goes away.
   exec.spin_for(std::chrono::milliseconds(200));
@@ -146,63 +154,94 @@ int play(const std::string& path, CarmenReaderOptions opt, const PlayOptions& p)
   usageError("play: built without the cairn runtime, only --print is available");
 #endif
 }
+
+void usage() {
+  std::cout << "usage: cairn-log info <file> [--skip-malformed]\n"
+               "       cairn-log play <file> [--rate R] [--pace time|consumers] [--skip-malformed] [--limit N]\n"
+               "                      [--wait-subscribers N] [--loop] [-p name:=value]... [--print]\n"
+               "play publishes scan, odom, /tf, /tf_static and /clock (the cairn_sim::LogPlayer component, whose\n"
+               "parameters -p sets); R = 0 (default): no wall-clock pacing; --pace consumers: each record after\n"
+               "every reliable subscriber acknowledged the previous one; --print: text to stdout instead (with\n"
+               "--rate, --limit and --skip-malformed only)\n"
+               "files: CARMEN logs (.clf, .log), plain, gzip or bzip2\n";
+}
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 3 || !std::strcmp(argv[1], "--help")) {
-    std::cout << "usage: cairn-log info <file>\n"
-                 "       cairn-log play <file> [--rate R] [--pace time|consumers] [--skip-malformed] [--limit N]\n"
-                 "                      [--wait-subscribers N] [--loop] [-p name:=value]... [--print]\n"
-                 "play publishes scan, odom, /tf, /tf_static and /clock (the cairn_sim::LogPlayer component, whose\n"
-                 "parameters -p sets); R = 0 (default): no wall-clock pacing; --pace consumers: each record after\n"
-                 "every reliable subscriber acknowledged the previous one; --print: text to stdout instead\n"
-                 "files: CARMEN logs (.clf, .log), plain, gzip or bzip2\n";
-    return argc < 3 ? 2 : 0;
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    usage();
+    return argc < 2 ? 2 : 0;
   }
-  const std::string verb = argv[1], path = argv[2];
+  const std::string verb = argv[1];
+  if (verb != "info" && verb != "play") usageError("unknown verb '" + verb + "' (try --help)");
+  if (argc < 3) usageError(verb + ": expected a log file");
+  const std::string path = argv[2];
   CarmenReaderOptions opt;
   PlayOptions play_opts;
-  const auto number = [&](int& i, const std::string& a) {
+  std::string play_only, publish_only;  // first option given that only `play` / only publishing uses
+  const auto value = [&](int& i, const std::string& a) -> std::string {
     if (i + 1 >= argc) usageError(a + " needs a value");
-    const std::string v = argv[++i];
+    return argv[++i];
+  };
+  const auto number = [&](const std::string& a, const std::string& v) {
     char* end = nullptr;
     const double x = std::strtod(v.c_str(), &end);
     if (v.empty() || *end || !std::isfinite(x) || x < 0) usageError(a + ": '" + v + "' is not a number >= 0");
     return x;
   };
+  // ranges of the LogPlayer component's parameters
+  const auto count = [&](const std::string& a, const std::string& v, double max) {
+    const double x = number(a, v);
+    if (x != std::floor(x) || x > max) {
+      char range[64];
+      std::snprintf(range, sizeof range, "[0, %.15g]", max);
+      usageError(a + ": '" + v + "' is not an integer in " + range);
+    }
+    return static_cast<long>(x);
+  };
   for (int i = 3; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a != "--skip-malformed" && play_only.empty()) play_only = a;
     if (a == "--skip-malformed") {
       opt.skip_malformed = true;
       opt.on_warning = [](const InputError& e) { std::cerr << "cairn: warning: " << e.what() << " (skipped)\n"; };
     } else if (a == "--rate") {
-      play_opts.rate = number(i, a);
+      const std::string v = value(i, a);
+      play_opts.rate = number(a, v);
+      // 0 = no pacing; a tiny rate would wait practically forever for the second record
+      if (play_opts.rate != 0.0 && !(play_opts.rate >= 0.001 && play_opts.rate <= 1000.0))
+        usageError(a + ": '" + v + "' is not 0 (no pacing) or a number in [0.001, 1000]");
     } else if (a == "--limit") {
-      play_opts.limit = static_cast<long>(number(i, a));
+      play_opts.limit = count(a, value(i, a), 1e12);
     } else if (a == "--wait-subscribers") {
-      play_opts.wait_subscribers = static_cast<long>(number(i, a));
-    } else if (a == "--pace" && i + 1 < argc) {
-      play_opts.pace = argv[++i];
+      play_opts.wait_subscribers = count(a, value(i, a), 1000);
+      if (publish_only.empty()) publish_only = a;
+    } else if (a == "--pace") {
+      play_opts.pace = value(i, a);
       if (play_opts.pace != "time" && play_opts.pace != "consumers") usageError("--pace: '" + play_opts.pace + "' (time or consumers)");
+      if (publish_only.empty()) publish_only = a;
     } else if (a == "--loop") {
       play_opts.loop = true;
+      if (publish_only.empty()) publish_only = a;
     } else if (a == "--print") {
       play_opts.print = true;
-    } else if (a == "-p" && i + 1 < argc) {
-      const std::string kv = argv[++i];
+    } else if (a == "-p") {
+      const std::string kv = value(i, a);
       const auto eq = kv.find(":=");
       if (eq == std::string::npos || eq == 0) usageError("-p expects name:=value, got '" + kv + "'");
       play_opts.params[kv.substr(0, eq)] = kv.substr(eq + 2);
+      if (publish_only.empty()) publish_only = a;
     } else {
       usageError("unknown option '" + a + "'");
     }
   }
+  if (verb == "info" && !play_only.empty()) usageError("info: " + play_only + " is an option of play");
+  if (play_opts.print && !publish_only.empty()) usageError("play: " + publish_only + " applies to publishing, not to --print");
   try {
     if (verb == "info") return info(path, opt);
-    if (verb == "play") return play(path, opt, play_opts);
+    return play(path, opt, play_opts);
   } catch (const InputError& e) {
     std::cerr << "cairn: " << e.what() << "\n";
     return 2;
   }
-  usageError("unknown verb '" + verb + "'");
 }
