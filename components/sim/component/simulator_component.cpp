@@ -10,7 +10,9 @@
 #include <memory>
 #include <mutex>
 #include <numbers>
+#include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cairn/component.hpp"
@@ -122,6 +124,15 @@ class Simulator : public cairn::Node {
     } catch (const std::exception& e) {
       throw std::invalid_argument("world: '" + world_param + "': " + e.what());
     }
+    // The core emits at most one scan and one odometry message per physics step: a faster rate would
+    // silently give the step rate.
+    for (const auto& [name, hz] : {std::pair<const char*, double>{"laser.rate", cfg.laser.rate}, {"odom_rate", cfg.odom_rate}})
+      if (hz * cfg.physics_dt > 1.0 + 1e-9) {
+        std::ostringstream msg;
+        msg << name << ": " << hz << " Hz is more than one message per physics step (physics_dt " << cfg.physics_dt
+            << " s: at most " << 1.0 / cfg.physics_dt << " Hz)";
+        throw std::invalid_argument(msg.str());
+      }
     if (start.size() == 3) {
       cfg.start = sim::Pose2{start[0], start[1], start[2]};
     } else if (!start.empty()) {

@@ -723,6 +723,14 @@ TEST(SimulatorComponent, LaunchSpecValidationNamesFileLineAndParameter) {
   EXPECT_NE(e.find("'real_time_factor' expects double"), std::string::npos) << e;
   e = launchError("cairn_sim::Simulator", "{people.file: /nonexistent/walkers.csv}");
   EXPECT_NE(e.find("/nonexistent/walkers.csv"), std::string::npos) << e;
+  // above the physics rate the core gave the step rate instead (200 Hz at physics_dt 0.01 s: 100 scans a second)
+  e = launchError("cairn_sim::Simulator", "{laser.rate: 200}");
+  EXPECT_NE(e.find("laser.rate: 200 Hz is more than one message per physics step (physics_dt 0.01 s: at most 100 Hz)"),
+            std::string::npos) << e;
+  e = launchError("cairn_sim::Simulator", "{odom_rate: 500, physics_dt: 0.005}");
+  EXPECT_NE(e.find("odom_rate: 500 Hz is more than one message per physics step (physics_dt 0.005 s: at most 200 Hz)"),
+            std::string::npos) << e;
+  EXPECT_EQ(launchError("cairn_sim::Simulator", "{laser.rate: 200, physics_dt: 0.005}"), "");
   e = launchError("cairn_sim::Simulator", "{laser_rate: 10}");
   EXPECT_NE(e.find("laser_rate"), std::string::npos) << e;
   e = launchError("cairn_sim::LogPlayer", "{file: " + kRoot + "/components/sim/test/data/bad_log.clf}");
