@@ -466,7 +466,7 @@ struct Parser {
         s.kind = str(need(n[i], "kind", p), p + "kind");
         if (s.kind == "scripted") {
           s.waypoints = points(need(n[i], "waypoints", p), p + "waypoints", 2);
-          s.speed = positive(n[i], "speed", p, s.speed);
+          s.speed = inRange(n[i], "speed", p, s.speed, 0.01, 10.0);  // m/s; 1e300 never finished a step
           s.start_time = num(n[i], "start_time", p, 0.0);
         } else if (s.kind == "csv" || s.kind == "eth_obsmat" || s.kind == "edinburgh") {
           s.file = resolve(str(need(n[i], "file", p), p + "file"));

@@ -166,6 +166,12 @@ TEST(WorldErrors, CrowdValuesAreRangeChecked) {
   EXPECT_EQ(errorOf(head + "  base_rate: 3600\n  max_people: 1000\n"), "no error");
 }
 
+TEST(WorldErrors, ScriptedWalkerSpeedIsRangeChecked) {
+  // speed 1e300 passed and then hung the run (the walk along the looped path never used up the distance)
+  EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\npeople:\n  - {kind: scripted, waypoints: [[0, 1], [1, 1]], speed: 1e300}\n"),
+            "w.yaml:4: 'people[0].speed' must be in [0.01, 10], got 1e300");
+}
+
 TEST(WorldErrors, ReflectivitiesAreInZeroOne) {
   // doors, furniture and markers were checked; walls and segments were not
   EXPECT_EQ(errorOf("wall_reflectivity: -5\nwalls:\n  - [[0,0],[1,0]]\n"),
