@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -225,8 +226,18 @@ double pointSegDist(Vec2 p, Vec2 a, Vec2 b) {
 
 FreeSpaceGrid::FreeSpaceGrid(const World& world, double resolution, double clearance) : res_(resolution) {
   min_ = {world.bounds_min.x - clearance, world.bounds_min.y - clearance};
-  nx_ = static_cast<int>(std::ceil((world.bounds_max.x - world.bounds_min.x + 2 * clearance) / res_)) + 1;
-  ny_ = static_cast<int>(std::ceil((world.bounds_max.y - world.bounds_min.y + 2 * clearance) / res_)) + 1;
+  const double w = world.bounds_max.x - world.bounds_min.x, h = world.bounds_max.y - world.bounds_min.y;
+  const double fx = std::ceil((w + 2 * clearance) / res_) + 1, fy = std::ceil((h + 2 * clearance) / res_) + 1;
+  constexpr double kMaxCells = 25e6;  // about 1 km x 1 km at 0.2 m; A* allocates ~14 bytes per cell per plan
+  if (!(fx * fy <= kMaxCells)) {
+    char msg[256];
+    std::snprintf(msg, sizeof msg,
+                  "crowd: the world's extent of %.6g x %.6g m is too large for the crowd's free-space grid "
+                  "(%.3g cells of %g m, at most %.0f)", w, h, fx * fy, res_, kMaxCells);
+    throw InputError(world.file, 0, msg);
+  }
+  nx_ = static_cast<int>(fx);
+  ny_ = static_cast<int>(fy);
   blocked_.assign(static_cast<std::size_t>(nx_) * ny_, 0);
   std::vector<Segment> segs = world.walls;
   std::vector<Circle> circles;

@@ -68,9 +68,11 @@ SegmentGrid::SegmentGrid(std::vector<Segment> segments, double cell_size) : segm
   }
   if (segments_.empty()) lo = hi = {0, 0};
   if (cell_size <= 0.0) {
-    // About one cell per metre of wall, but not finer than 0.25 m and at most ~1M cells.
+    // About one cell per metre of wall, but not finer than 0.25 m and at most ~1M cells (and at most ~1000
+    // along either side: a long thin world, e.g. one wall 1e12 m long, would otherwise need billions).
     const double area = std::max(1.0, (hi.x - lo.x) * (hi.y - lo.y));
-    cell_size = std::max({0.25, std::sqrt(area / 1.0e6), std::min(1.0, 0.5 * total_len / std::max<std::size_t>(1, segments_.size()))});
+    cell_size = std::max({0.25, std::sqrt(area / 1.0e6), std::max(hi.x - lo.x, hi.y - lo.y) / 1000.0,
+                          std::min(1.0, 0.5 * total_len / std::max<std::size_t>(1, segments_.size()))});
   }
   cell_ = cell_size;
   inv_cell_ = 1.0 / cell_;

@@ -259,6 +259,18 @@ TEST(PeopleSimulator, WorldPeopleSectionWithRecordedEthData) {
   }
 }
 
+TEST(FreeSpace, AWorldTooLargeForTheGridIsAnInputError) {
+  // a wall 1e12 m long used to make the crowd's grid allocate until std::bad_alloc (or the OOM killer)
+  const World w = parseWorld("walls: [[[0, 0], [1e12, 0], [10, 5]]]\n", "long.yaml");
+  try {
+    FreeSpaceGrid grid(w);
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("long.yaml:0: crowd: the world's extent of 1e+12 x 5 m is too large", 0), 0u)
+        << e.what();
+  }
+}
+
 TEST(FreeSpace, ClosedDoorsBlockPlanning) {
   const World w = parseWorld(
       "walls:\n  - [[0,0],[10,0],[10,10],[0,10],[0,0]]\n  - [[5,0],[5,4]]\n  - [[5,5],[5,10]]\n"

@@ -48,6 +48,15 @@ TEST(SegmentGrid, SquareRoomAnalytic) {
   EXPECT_NEAR(h.range, 15.0, 1e-9);
 }
 
+TEST(SegmentGrid, ALongThinWorldGetsCoarseCellsNotBillions) {
+  // one wall 1e12 m long: the cell size came from the (zero) area and the grid needed ~4e9 cells (std::bad_alloc)
+  const SegmentGrid grid({{{0, 0}, {1e12, 0}, 0.3F}, {{0, 1}, {10, 1}, 0.3F}});
+  EXPECT_GE(grid.cellSize(), 1e9);
+  const RayHit h = grid.cast({5, 0.5}, {0, 1}, 10.0);
+  ASSERT_TRUE(h.hit);
+  EXPECT_NEAR(h.range, 0.5, 1e-9);
+}
+
 TEST(SegmentGrid, AgreesWithNaiveOnRandomScenes) {
   Rng rng(7);
   for (int scene = 0; scene < 5; ++scene) {
