@@ -5,6 +5,7 @@
 #include "log_player.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <variant>
 
 #include "convert.hpp"
@@ -43,6 +44,12 @@ LogPlayer::LogPlayer(const cairn::NodeOptions& o) : cairn::Node(o) {
   opts_.reader.layout.max_range = declare_parameter<double>("laser.max_range", opts_.reader.layout.max_range, D{"m, readings at or above are no return (+inf)", 0.1, 1000.0, true});
   if (file_.empty()) throw std::invalid_argument("parameter 'file' is required (a CARMEN log)");
   if (pace != "time" && pace != "consumers") throw std::invalid_argument("pace: '" + pace + "' (expected time or consumers)");
+  // (0, 0.001) would wait practically forever for the second record (1e-300: never)
+  if (rate_ != 0.0 && rate_ < 0.001) {
+    char msg[96];
+    std::snprintf(msg, sizeof msg, "rate: %g (expected 0 = no pacing, or 0.001 to 1000)", rate_);
+    throw std::invalid_argument(msg);
+  }
   consumers_ = pace == "consumers";
   tick_period_ = std::chrono::nanoseconds(static_cast<int64_t>(1e9 / tick_hz));
 

@@ -737,6 +737,8 @@ TEST(SimulatorComponent, LaunchSpecValidationNamesFileLineAndParameter) {
   EXPECT_EQ(e.rfind("sim.yaml:4: ", 0), 0u) << e;
   EXPECT_NE(e.find("bad_log.clf:3: FLASER"), std::string::npos) << e;
   EXPECT_EQ(launchError("cairn_sim::LogPlayer", "{file: " + kRoot + "/test/data/carmen/aces_head60.clf, rate: 2.0}"), "");
+  e = launchError("cairn_sim::LogPlayer", "{file: " + kRoot + "/test/data/carmen/aces_head60.clf, rate: 1.0e-300}");
+  EXPECT_NE(e.find("rate: 1e-300 (expected 0 = no pacing, or 0.001 to 1000)"), std::string::npos) << e;
 }
 
 TEST(SimulatorComponent, TheShippedDemoLaunchSpecValidates) {
