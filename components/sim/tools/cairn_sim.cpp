@@ -326,10 +326,13 @@ int cmdRun(int argc, char** argv) {
     if (it == world.routes.end()) usageError("run: world '" + world.name + "' has no route '" + route_name + "'");
     route = it->second;
   }
-  std::filesystem::create_directories(out_dir);
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) usageError("run: --out '" + out_dir + "': " + ec.message());
   Simulator sim(std::move(world), cfg);
   if (route) sim.followRoute(*route, rc);
   std::ofstream path_csv(out_dir + "/robot_path.csv"), people_csv(out_dir + "/people.csv");
+  if (!path_csv || !people_csv) usageError("run: --out '" + out_dir + "': cannot write files there");
   path_csv << "t,x,y,theta,odom_x,odom_y,odom_theta\n";
   people_csv << "t,id,x,y\n";
   char buf[256];
@@ -396,7 +399,7 @@ int cmdPeople(int argc, char** argv) {
   // Same stream as the full simulator's people (Simulator forks stream 3 from the seed).
   PeopleSimulator people(world, GaitConfig{}, Rng(seed).fork(3));
   std::ofstream out(out_file);
-  if (!out) usageError("people: cannot write '" + out_file + "'");
+  if (!out) usageError("people: --out '" + out_file + "': cannot write it");
   out << "t,id,x,y\n";
   char buf[128];
   const long steps = std::lround(duration * rate);
