@@ -16,7 +16,9 @@
 #include <sys/wait.h>
 #include <map>
 #include <mutex>
+#include <string>
 #include <thread>
+#include <utility>
 #include <unistd.h>
 #include <vector>
 
@@ -641,31 +643,28 @@ TEST(LogPlayCli, PublishesARecordLimitOverDdsAndExits) {
   EXPECT_TRUE(h.odoms == odom_stamps);
 }
 
-TEST(LogPlayCli, ABadLogIsOneErrorLineNamingFileAndLineAndExitCode2) {
-  const std::string bad = kRoot + "/components/sim/test/data/bad_log.clf";
-  const std::string cmd = std::string(CAIRN_LOG_EXE) + " play " + bad + " 2>&1";
-  FILE* f = ::popen(cmd.c_str(), "r");
-  ASSERT_NE(f, nullptr);
+// `cairn-log <args>` with stderr folded into the output; the exit code (-1 if it did not exit normally).
+static std::pair<int, std::string> runCairnLog(const std::string& args) {
+  FILE* f = ::popen((std::string(CAIRN_LOG_EXE) + " " + args + " 2>&1").c_str(), "r");
+  if (f == nullptr) return {-1, "popen failed"};
   std::string out;
-  char buf[512];
+  char buf[4096];
   while (std::fgets(buf, sizeof buf, f) != nullptr) out += buf;
   const int status = ::pclose(f);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << out;
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+TEST(LogPlayCli, ABadLogIsOneErrorLineNamingFileAndLineAndExitCode2) {
+  const auto [code, out] = runCairnLog("play " + kRoot + "/components/sim/test/data/bad_log.clf");
+  EXPECT_EQ(code, 2) << out;
   EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
   EXPECT_NE(out.find("bad_log.clf:3:"), std::string::npos) << out;
 }
 
 TEST(LogPlayCli, AnUnknownParameterIsOneErrorLineAndNothingPlays) {
   // -p with a name LogPlayer does not declare used to be ignored (exit 0, the log played)
-  const std::string log = kRoot + "/test/data/carmen/aces_head60.clf";
-  const std::string cmd = std::string(CAIRN_LOG_EXE) + " play " + log + " --limit 3 -p foo:=1 2>&1";
-  FILE* f = ::popen(cmd.c_str(), "r");
-  ASSERT_NE(f, nullptr);
-  std::string out;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, f) != nullptr) out += buf;
-  const int status = ::pclose(f);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << out;
+  const auto [code, out] = runCairnLog("play " + kRoot + "/test/data/carmen/aces_head60.clf --limit 3 -p foo:=1");
+  EXPECT_EQ(code, 2) << out;
   EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
   // the container's load refuses it (as launch validation does), before the log is opened
   EXPECT_EQ(out.rfind("cairn: params.foo: cairn_sim::LogPlayer (/log_player) has no such parameter (declared: ", 0), 0u)
