@@ -94,6 +94,16 @@ TEST(LaunchSpec, DuplicateNames) {
   EXPECT_EQ(error_of("containers:\n  - name: c\n  - name: c\n"), "spec.yaml:3: container.name: duplicate name 'c'");
 }
 
+// A repeated key used to be accepted with the second entry silently ignored (yaml-cpp finds only the first).
+TEST(LaunchSpec, RepeatedKeys) {
+  EXPECT_EQ(error_of("containers:\n  - name: a\ncontainers:\n  - name: b\n"), "spec.yaml:3: spec: duplicate key 'containers'");
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
+                     "        params: {rate_hz: 1.0, rate_hz: 2.0}\n"),
+            "spec.yaml:5: component.params: duplicate key 'rate_hz'");
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    threads: 2\n    threads: 3\n"),
+            "spec.yaml:4: container: duplicate key 'threads'");
+}
+
 TEST(LaunchSpec, RemappingThatJoinsTwoMessageTypes) {
   const auto e = error_of(
       "containers:\n  - name: c\n    components:\n      - class: cairn_demo::Listener\n"

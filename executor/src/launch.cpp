@@ -34,7 +34,17 @@ class SpecParser {
 
   [[noreturn]] void fail(const YAML::Node& n, const std::string& what) const { throw LaunchError(file_, line_of(n), what); }
 
+  // yaml-cpp keeps both entries of a repeated key and node["key"] finds only the first: the second would be
+  // silently ignored.
+  void unique_keys(const YAML::Node& map, const std::string& where) const {
+    std::set<std::string> seen;
+    for (const auto& kv : map)
+      if (!seen.insert(kv.first.as<std::string>()).second)
+        fail(kv.first, where + ": duplicate key '" + kv.first.as<std::string>() + "'");
+  }
+
   void allow_keys(const YAML::Node& map, const std::string& where, std::initializer_list<const char*> keys) const {
+    unique_keys(map, where);
     for (const auto& kv : map) {
       const std::string k = kv.first.as<std::string>();
       bool ok = false;
@@ -129,6 +139,7 @@ class SpecParser {
     if (const auto p = n["params"]) {
       c.params_line = line_of(p);
       if (!p.IsMap()) fail(p, "component.params: expected a map of name: value");
+      unique_keys(p, "component.params");
       for (const auto& kv : p) {
         const std::string k = kv.first.as<std::string>();
         try {
@@ -146,11 +157,13 @@ class SpecParser {
     if (const auto r = n["remap"]) {
       c.remap_line = line_of(r);
       if (!r.IsMap()) fail(r, "component.remap: expected a map of from: to");
+      unique_keys(r, "component.remap");
       for (const auto& kv : r) c.remaps[kv.first.as<std::string>()] = str(kv.second, "remap." + kv.first.as<std::string>());
     }
     if (const auto q = n["qos"]) {
       c.qos_line = line_of(q);
       if (!q.IsMap()) fail(q, "component.qos: expected a map of topic: {key: value}");
+      unique_keys(q, "component.qos");
       for (const auto& kv : q) {
         const std::string topic = kv.first.as<std::string>();
         if (!kv.second.IsMap()) fail(kv.second, "qos." + topic + ": expected a map");

@@ -192,9 +192,11 @@ struct Parser {
 
   void checkKeys(const YAML::Node& map, const std::set<std::string>& allowed, const std::string& path) const {
     if (!map.IsMap()) fail(map, "'" + path + "' must be a mapping");
+    std::set<std::string> seen;  // yaml-cpp keeps a repeated key and map[key] finds the first: the second is lost
     for (const auto& kv : map) {
       const auto key = kv.first.as<std::string>();
       if (!allowed.count(key)) fail(kv.first, "unknown key '" + path + key + "'");
+      if (!seen.insert(key).second) fail(kv.first, "duplicate key '" + path + key + "'");
     }
   }
 

@@ -130,6 +130,10 @@ TEST(World, InterpolatedFurnitureMovesContinuously) {
 
 TEST(WorldErrors, NameFileLineAndKey) {
   EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\nbogus: 1\n"), "w.yaml:3: unknown key 'bogus'");
+  // a repeated key used to be accepted with its second value silently ignored
+  EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\nwalls:\n  - [[0,0],[0,1]]\n"), "w.yaml:3: duplicate key 'walls'");
+  EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\ndoors:\n  - {hinge: [0,0], latch: [1,0], hinge: [2,0]}\n"),
+            "w.yaml:4: duplicate key 'doors[0].hinge'");
   EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,x]]\n"), "w.yaml:2: 'walls[0][1][1]' must be a number, got 'x'");
   EXPECT_EQ(errorOf("walls:\n  - [[0,0],[1,0]]\ndoors:\n  - name: d\n    latch: [1, 1]\n"),
             "w.yaml:4: missing key 'doors[0].hinge'");
