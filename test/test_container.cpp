@@ -153,6 +153,13 @@ TEST(Container, UnknownParametersAreRefused) {
   good.parameters["rate_hz"] = 5.0;
   const auto ok = mgr.load(good);
   EXPECT_TRUE(ok.ok) << ok.error;
+  // A sender that validated the parameters itself (cairn launch: its spec validation constructs every component in
+  // a dry run) spares the component that second construction; the container then takes its word for it.
+  cairn::LoadRequest trusted{"cairn_demo::Talker", "t4"};
+  trusted.parameters["bogus"] = int64_t{1};
+  trusted.parameters_validated = true;
+  const auto t = mgr.load(trusted);
+  EXPECT_TRUE(t.ok) << t.error;
 }
 
 // A restart with restore_parameters brings a component back with what it was first loaded with (the bt executive's

@@ -68,6 +68,8 @@ LoadRequest from_msg(const LoadNode_Request& r) {
       out.use_intra_process = std::get<bool>(v);
     } else if (p.name == "restore_parameters" && std::holds_alternative<bool>(v)) {
       out.restore_parameters = std::get<bool>(v);
+    } else if (p.name == "parameters_validated" && std::holds_alternative<bool>(v)) {
+      out.parameters_validated = std::get<bool>(v);
     } else if (p.name.rfind("qos:", 0) == 0 && std::holds_alternative<std::string>(v)) {
       // qos:<topic>:<key> = value
       const auto last = p.name.rfind(':');
@@ -182,11 +184,12 @@ LoadResult ComponentManager::load(const LoadRequest& given) {
   // instead of blocking the container forever.
   auto state = std::make_shared<std::promise<std::shared_ptr<void>>>();
   auto fut = state->get_future();
-  std::thread([state, factory, no, class_name = req.class_name, fqn] {
+  std::thread([state, factory, no, class_name = req.class_name, fqn, check = !req.parameters_validated] {
     try {
-      if (!no.parameter_overrides.empty()) {
+      if (check && !no.parameter_overrides.empty()) {
         // Parameters the component does not declare are refused, as by launch validation: a dry run first
-        // (no DDS), which also finds them in components that never read them.
+        // (no DDS), which also finds them in components that never read them. Loads from `cairn launch` skip it:
+        // the spec's validation did the same dry run before anything started.
         NodeOptions dry = no;
         dry.executor = nullptr;
         dry.context = Context::create(ContextOptions{-1, true});

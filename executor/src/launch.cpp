@@ -447,6 +447,10 @@ composition_interfaces::srv::LoadNode_Request load_request(const LaunchComponent
   ipc.name = "use_intra_process_comms";
   ipc.value = to_parameter_msg(c.use_intra_process);
   r.extra_arguments.push_back(ipc);
+  rcl_interfaces::msg::Parameter validated;  // validate_launch_spec constructed every component in a dry run
+  validated.name = "parameters_validated";
+  validated.value = to_parameter_msg(true);
+  r.extra_arguments.push_back(validated);
   return r;
 }
 

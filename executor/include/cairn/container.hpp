@@ -33,6 +33,10 @@ struct LoadRequest {
   /// setting of the last successful load of the same node (fqn) in this container, overlaid by the ones given here
   /// (class: empty means the remembered one). Over DDS: extra argument `restore_parameters: true` of load_node.
   bool restore_parameters = false;
+  /// The sender already checked the parameters against the class (`cairn launch` validates the whole spec, dry-run
+  /// constructions included, before it starts anything), so the container skips its own dry-run construction.
+  /// Over DDS: extra argument `parameters_validated: true` of load_node.
+  bool parameters_validated = false;
 };
 
 /// Error text of a restore_parameters load when this container never loaded that node (e.g. it was just
