@@ -168,6 +168,21 @@ class ParallelNode : public ControlNode {
     return {InputPortWithDefault<int>("success_count", "-1", "children that must succeed (-1: all)"),
             InputPortWithDefault<int>("failure_count", "1", "failures that make the node fail")};
   }
+  // Literal thresholds that cannot fit the children are a load error (file:line); before, the first tick failed
+  // with a run-time warning. Thresholds from the blackboard, and skipped children, are checked when ticked.
+  std::string validateChildren() const override {
+    if (std::string err = ControlNode::validateChildren(); !err.empty()) return err;
+    const int n = static_cast<int>(children_.size());
+    int succ = -1, fail = 1;
+    if (success_in_.isLiteral()) success_in_.get(succ);
+    if (failure_in_.isLiteral()) failure_in_.get(fail);
+    const int succ_thr = succ < 0 ? n + succ + 1 : succ;
+    const int fail_thr = fail < 0 ? n + fail + 1 : fail;
+    if (succ_thr > n || succ_thr <= 0 || fail_thr <= 0)
+      return "Parallel thresholds success_count=" + std::to_string(succ) + " failure_count=" + std::to_string(fail) +
+             " do not fit " + std::to_string(n) + " children";
+    return {};
+  }
 
  protected:
   NodeStatus tick() override {

@@ -89,6 +89,11 @@ TEST_F(Xml, ErrorsCarryFileAndLine) {
   EXPECT_EQ(loadError(wrap("<Delay delay_msec=\"-1\"><AlwaysSuccess/></Delay>")),
             "t.xml:1: port 'delay_msec' must not be negative, got -1");
   EXPECT_EQ(loadError(wrap("<Sleep msec=\"0\"/>")), "");
+  EXPECT_EQ(loadError(wrap("<Parallel success_count=\"3\"><AlwaysSuccess/><AlwaysSuccess/></Parallel>")),
+            "t.xml:1: Parallel thresholds success_count=3 failure_count=1 do not fit 2 children");
+  EXPECT_EQ(loadError(wrap("<Parallel failure_count=\"-4\"><AlwaysSuccess/><AlwaysSuccess/></Parallel>")),
+            "t.xml:1: Parallel thresholds success_count=-1 failure_count=-4 do not fit 2 children");
+  EXPECT_EQ(loadError(wrap("<Parallel success_count=\"-2\"><AlwaysSuccess/><AlwaysSuccess/></Parallel>")), "");
   EXPECT_EQ(loadError(wrap("<Sequence>\n<WriteInt out=\"{k}\"/>\n<ReadString in=\"{k}\"/></Sequence>")),
             "t.xml:3: type mismatch: blackboard entry 'k' is int at t.xml:2 and std::string here");
   EXPECT_EQ(loadError(wrap("<ReadPose pose=\"1;2\"/>")),
