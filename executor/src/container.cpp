@@ -38,13 +38,13 @@ std::string default_node_name(const std::string& class_name) {
 
 std::optional<std::string> unknown_parameter_error(const Context& dry, const std::string& class_name,
                                                    const std::string& fqn) {
-  for (const auto& u : dry.unused_parameters()) {
-    std::string declared;
-    for (const auto& d : u.declared) declared += (declared.empty() ? "" : ", ") + d;
-    return "params." + u.names.front() + ": " + class_name + " (" + fqn + ") has no such parameter (declared: " +
-           declared + ")";
-  }
-  return std::nullopt;
+  const auto unused = dry.unused_parameters();
+  if (unused.empty()) return std::nullopt;
+  const auto& first = unused.front();  // the one dry-run node; its first unknown name
+  std::string declared;
+  for (const auto& d : first.declared) declared += (declared.empty() ? "" : ", ") + d;
+  return "params." + first.names.front() + ": " + class_name + " (" + fqn + ") has no such parameter (declared: " +
+         declared + ")";
 }
 
 namespace {

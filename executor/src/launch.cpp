@@ -28,6 +28,13 @@ namespace {
 
 int line_of(const YAML::Node& n) { return n.Mark().line >= 0 ? n.Mark().line + 1 : 0; }
 
+// A range bound in messages: shortest form ("64", "0.1", "1e+09").
+std::string fmt(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
 class SpecParser {
  public:
   explicit SpecParser(std::string file) : file_(std::move(file)) {}
@@ -75,12 +82,6 @@ class SpecParser {
       fail(n, key + ": expected " + (integer ? "an integer" : "a number") + ", got '" + n.Scalar() + "'");
     if (*v < lo || *v > hi) fail(n, key + ": " + n.Scalar() + " is outside [" + fmt(lo) + ", " + fmt(hi) + "]");
     return *v;
-  }
-
-  static std::string fmt(double v) {
-    std::ostringstream o;
-    o << v;
-    return o.str();
   }
 
   LaunchSpec parse(const YAML::Node& root) {
@@ -204,10 +205,11 @@ class SpecParser {
     fs::path path = rel;
     if (path.is_relative()) path = fs::path(file_).parent_path() / path;
     std::error_code ec;
+    const bool directory = fs::is_directory(path, ec);
     std::ifstream in(path);
-    if (fs::is_directory(path, ec) || !in)
+    if (directory || !in)
       throw LaunchError(file_, c.params_line, "component.params_file: cannot read '" + path.string() + "'" +
-                                                  (fs::is_directory(path, ec) ? " (a directory)" : ""));
+                                                  (directory ? " (a directory)" : ""));
     YAML::Node root;
     const std::string pfile = path.string();
     try {
@@ -281,13 +283,8 @@ std::optional<double> parse_number(const std::string& text) {
 double option_number(const std::string& option, const std::string& text, double lo, double hi, bool integer) {
   const auto v = parse_number(text);
   if (!v || *v < lo || *v > hi || (integer && *v != std::floor(*v))) {
-    auto g = [](double x) {
-      std::ostringstream o;
-      o << x;
-      return o.str();
-    };
-    throw OptionError(option + " expects " + (integer ? "an integer" : "a number") + " in [" + g(lo) + ", " + g(hi) +
-                      "], got '" + text + "'");
+    throw OptionError(option + " expects " + (integer ? "an integer" : "a number") + " in [" + fmt(lo) + ", " +
+                      fmt(hi) + "], got '" + text + "'");
   }
   return *v;
 }

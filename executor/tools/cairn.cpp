@@ -147,10 +147,10 @@ std::vector<cairn::GraphEndpoint> discover(Cli& cli, std::chrono::milliseconds w
 // ---------------- topic ----------------
 int topic_list(const Args& a) {
   a.at_most(0, "topic list");
-  wait_of(a);
+  const auto wait = wait_of(a);
   Cli cli;
   std::set<std::pair<std::string, std::string>> rows;
-  for (const auto& e : discover(cli, wait_of(a))) {
+  for (const auto& e : discover(cli, wait)) {
     // ROS-convention topics as /name; service topics (rq/, rr/) are not topics to the user; anything else
     // (topics of non-cairn DDS applications) by its DDS name and type
     if (e.dds_topic.rfind("rq/", 0) == 0 || e.dds_topic.rfind("rr/", 0) == 0) continue;
@@ -173,9 +173,9 @@ std::optional<cairn::GraphEndpoint> find_publisher(Cli& cli, const std::string& 
   return std::nullopt;
 }
 
-const cairn::msgs::TypeSupport& type_of_topic(Cli& cli, const std::string& topic, const Args& a,
+const cairn::msgs::TypeSupport& type_of_topic(Cli& cli, const std::string& topic, std::chrono::milliseconds wait,
                                               cairn::QoS* qos_out) {
-  auto pub = find_publisher(cli, topic, wait_of(a, 5.0));
+  auto pub = find_publisher(cli, topic, wait);
   if (!pub) throw std::runtime_error("no publisher of " + topic + " found (is the topic name right? see cairn topic list)");
   const auto* ts = cairn::msgs::find_type_support(pub->dds_type);
   if (!ts) throw std::runtime_error(topic + " carries " + pub->dds_type + ", a type cairn does not know");
@@ -194,10 +194,10 @@ int topic_echo(const Args& a) {
   a.at_most(1, "topic echo <topic>");
   const std::string topic = norm_topic(a.pos[0]);
   const long count = a.has("--once") ? 1 : static_cast<long>(a.num("--count", 0, 1, 1e12, true));  // 0: until Ctrl-C
-  wait_of(a);  // a bad --wait is an error before anything starts
+  const auto wait = wait_of(a, 5.0);  // time to find a publisher; a bad --wait is an error before anything starts
   Cli cli;
   cairn::QoS qos;
-  const auto& ts = type_of_topic(cli, topic, a, &qos);
+  const auto& ts = type_of_topic(cli, topic, wait, &qos);
   std::atomic<long> printed{0};
   std::mutex mu;
   std::condition_variable cv;
@@ -225,10 +225,10 @@ int topic_hz(const Args& a) {
   a.at_most(1, "topic hz <topic>");
   const std::string topic = norm_topic(a.pos[0]);
   const double duration = a.num("--duration", 0, 0, kMaxDuration);  // 0: until Ctrl-C
-  wait_of(a);
+  const auto wait = wait_of(a, 5.0);
   Cli cli;
   cairn::QoS qos;
-  const auto& ts = type_of_topic(cli, topic, a, &qos);
+  const auto& ts = type_of_topic(cli, topic, wait, &qos);
   std::mutex mu;
   std::vector<double> stamps;
   auto reader = std::make_unique<cairn::DdsReader>(*cli.ctx, cairn::dds_topic_name(topic), ts, qos,
@@ -298,10 +298,10 @@ int topic_info(const Args& a) {
 // ---------------- node ----------------
 int node_list(const Args& a) {
   a.at_most(0, "node list");
-  wait_of(a);
+  const auto wait = wait_of(a);
   Cli cli;
   cairn::GraphView g(*cli.ctx);
-  g.wait_for_discovery(300ms, wait_of(a));
+  g.wait_for_discovery(300ms, wait);
   std::set<std::string> nodes;
   std::set<cairn::Gid> cairn_participants;
   for (const auto& e : g.endpoints()) {
@@ -340,7 +340,7 @@ int component_main(int argc, char** argv) {
   }
   const Args a = parse_args(argc, argv, 3, {"--name", "--namespace", "-p", "-r", "--timeout", "--wait"}, {});
   const auto timeout = std::chrono::milliseconds(int64_t(a.num("--timeout", 15, 0, kMaxWait) * 1000));
-  wait_of(a);
+  const auto wait = wait_of(a);
   if (sub == "list") a.at_most(1, "component list [container]");
   if (sub == "load") a.at_most(2, "component load <container> <class> [options]");
   if (sub == "unload") a.at_most(2, "component unload <container> <id>");
@@ -351,7 +351,7 @@ int component_main(int argc, char** argv) {
       containers.push_back(norm_topic(a.pos[0]));
     } else {
       std::set<std::string> found;
-      for (const auto& e : discover(cli, wait_of(a))) {
+      for (const auto& e : discover(cli, wait)) {
         const std::string suffix = "/_container/list_nodesRequest";
         if (!e.is_publisher && e.dds_topic.rfind("rq/", 0) == 0 && e.dds_topic.size() > suffix.size() &&
             e.dds_topic.compare(e.dds_topic.size() - suffix.size(), suffix.size(), suffix) == 0) {
