@@ -19,8 +19,12 @@ std::string formatTransition(std::uint64_t step, std::string_view path, NodeStat
   return s;
 }
 
+namespace {
+constexpr std::string_view kHeader = "# cairn-bt-trace 1";  // written by FileLogger, required by TraceReplay::read
+}  // namespace
+
 FileLogger::FileLogger(Tree& tree, std::ostream& os) : tree_(tree), os_(os) {
-  os_ << "# cairn-bt-trace 1\n";
+  os_ << kHeader << '\n';
   for (const auto& n : tree.nodes()) os_ << "N " << n->uid() << ' ' << n->path() << '\n';
   handle_ = tree.addObserver([this](const TransitionEvent& e) {
     os_ << "E " << e.step << ' ' << e.time.count() << ' ' << e.uid << ' ' << toString(e.old_status) << ' '
@@ -36,8 +40,6 @@ FileLogger::~FileLogger() {
 void FileLogger::flush() { os_.flush(); }
 
 namespace {
-constexpr std::string_view kHeader = "# cairn-bt-trace 1";
-
 /// The next space-separated field of `ss` as an unsigned or signed integer, all of it.
 template <class T>
 bool field(std::istringstream& ss, T& out) {
