@@ -102,6 +102,15 @@ TEST(Cli, CommandsAgainstARunningContainer) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(count(r.output, "\n"), 1) << "one line: " << r.output;
   EXPECT_NE(r.output.find("no publisher of /no_such_topic"), std::string::npos);
+  r = run(kCairn + " component list /no_such_container --wait 0.5");  // not found after discovery, not the 15 s reply timeout
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(count(r.output, "\n"), 1) << "one line: " << r.output;
+  EXPECT_NE(r.output.find("no container /no_such_container found (its list_nodes service was not discovered within 0.5 s"),
+            std::string::npos)
+      << r.output;
+  r = run(kCairn + " component unload no_such_container 1 --wait 0.5");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("no container /no_such_container found (its unload_node service"), std::string::npos) << r.output;
   r = run(kCairn + " param get /nobody x --timeout 0.5");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("node /nobody not found"), std::string::npos) << r.output;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -68,8 +69,8 @@ Component tools (run as cairn-<verb>):
   copa ...                             CoPA-Map people-activity model (components/copa_map)
   bt run <file.xml> ...                behavior trees (components/bt_executive)
 
-Common options: --wait S (topic, node, component: discovery time, 0-3600 s, default 1.5 s; topic echo/hz: time
-to find a publisher, default 5 s), --timeout S (param, component: time for the service reply, 0-3600 s, default
+Common options: --wait S (topic, node: discovery time, 0-3600 s, default 1.5 s; topic echo/hz: time to find a
+publisher, component: time to find the container(s), default 5 s), --timeout S (param, component: time for the service reply, 0-3600 s, default
 5 s / 15 s). --count is 1-1e12 (default: until Ctrl-C); --duration 0-1e9 s (0, the default: until Ctrl-C).
 Environment: CAIRN_DOMAIN_ID / ROS_DOMAIN_ID, CYCLONEDDS_URI, CAIRN_COMPONENT_PATH, CAIRN_LOG_LEVEL.
 )";
@@ -329,6 +330,21 @@ std::string container_service(const std::string& container, const std::string& w
   return norm_topic(container) + "/_container/" + what;
 }
 
+/// A client of `container`'s service `what` once a server of it is discovered within `wait` (--wait, the
+/// discovery time); "no container X found" otherwise, instead of waiting out the whole reply timeout for a
+/// container that does not exist.
+template <class Req, class Resp>
+auto container_client(Cli& cli, const std::string& container, const std::string& what, std::chrono::milliseconds wait) {
+  auto client = cli.node->create_client<Req, Resp>(container_service(container, what));
+  if (!client->wait_for_service(wait)) {
+    char secs[32];
+    std::snprintf(secs, sizeof secs, "%g", wait.count() / 1000.0);
+    throw std::runtime_error("no container " + norm_topic(container) + " found (its " + what + " service was not discovered within " +
+                             secs + " s; --wait S waits longer, `cairn component list` lists the running containers)");
+  }
+  return client;
+}
+
 int component_main(int argc, char** argv) {
   if (argc < 3) throw UsageError("component list|types|load|unload");
   const std::string sub = argv[2];
@@ -340,7 +356,7 @@ int component_main(int argc, char** argv) {
   }
   const Args a = parse_args(argc, argv, 3, {"--name", "--namespace", "-p", "-r", "--timeout", "--wait"}, {});
   const auto timeout = std::chrono::milliseconds(int64_t(a.num("--timeout", 15, 0, kMaxWait) * 1000));
-  const auto wait = wait_of(a);
+  const auto wait = wait_of(a, 5.0);  // time to find the container(s)
   if (sub == "list") a.at_most(1, "component list [container]");
   if (sub == "load") a.at_most(2, "component load <container> <class> [options]");
   if (sub == "unload") a.at_most(2, "component unload <container> <id>");
@@ -361,7 +377,7 @@ int component_main(int argc, char** argv) {
       containers.assign(found.begin(), found.end());
     }
     for (const auto& c : containers) {
-      auto client = cli.node->create_client<ListNodes_Request, ListNodes_Response>(container_service(c, "list_nodes"));
+      auto client = container_client<ListNodes_Request, ListNodes_Response>(cli, c, "list_nodes", wait);
       auto resp = client->call(ListNodes_Request{}, timeout);
       if (!resp) throw std::runtime_error("container " + c + " did not answer list_nodes");
       std::cout << c << "\n";
@@ -396,7 +412,7 @@ int component_main(int argc, char** argv) {
         req.remap_rules.push_back(from + kv.substr(kv.find(":=")));
       }
     }
-    auto client = cli.node->create_client<LoadNode_Request, LoadNode_Response>(container_service(a.pos[0], "load_node"));
+    auto client = container_client<LoadNode_Request, LoadNode_Response>(cli, a.pos[0], "load_node", wait);
     auto resp = client->call(req, timeout);
     if (!resp) throw std::runtime_error("container " + norm_topic(a.pos[0]) + " did not answer load_node (is it running?)");
     if (!resp->success) throw std::runtime_error(resp->error_message);
@@ -408,7 +424,7 @@ int component_main(int argc, char** argv) {
     if (a.pos.size() < 2) throw UsageError("component unload <container> <id>");
     UnloadNode_Request req;
     req.unique_id = static_cast<uint64_t>(cairn::option_number("id", a.pos[1], 0, 9e15, true));
-    auto client = cli.node->create_client<UnloadNode_Request, UnloadNode_Response>(container_service(a.pos[0], "unload_node"));
+    auto client = container_client<UnloadNode_Request, UnloadNode_Response>(cli, a.pos[0], "unload_node", wait);
     auto resp = client->call(req, timeout);
     if (!resp) throw std::runtime_error("container " + norm_topic(a.pos[0]) + " did not answer unload_node");
     if (!resp->success) throw std::runtime_error(resp->error_message);
