@@ -26,6 +26,7 @@
 #include <sstream>
 #include <thread>
 
+#include "../test/alloc_counter.hpp"
 #include "cairn/node.hpp"
 #include "cairn/process.hpp"
 #include "sensor_msgs/msg/Image.hpp"
@@ -34,9 +35,6 @@ using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 using Image = sensor_msgs::msg::Image;
 
-// heap allocations of the calling thread while armed (test/alloc_counter.cpp)
-extern thread_local bool g_count_allocs;
-extern thread_local long g_allocs;
 
 namespace {
 
@@ -96,16 +94,14 @@ void same_thread(std::size_t size, int iters) {
       pub->publish(std::move(slot));
     }
     lat.clear();
-    g_allocs = 0;
-    g_count_allocs = true;
+    start_counting_allocations();
     const auto start = Clock::now();
     for (int i = 0; i < iters; ++i) {
       t0 = Clock::now();
       pub->publish(std::move(slot));
     }
     const double total = ns_since(start);
-    g_count_allocs = false;
-    allocs = g_allocs;
+    allocs = stop_counting_allocations();
     const auto s = stats(lat);
     // baseline: a direct std::function call handing over the unique_ptr
     std::function<void(std::unique_ptr<Image>)> direct = [&](std::unique_ptr<Image> m) {

@@ -1,12 +1,26 @@
 // Global operator new/delete that count heap allocations of the calling thread while armed.
+#include "alloc_counter.hpp"
+
 #include <cstdlib>
 #include <new>
 
-thread_local bool g_count_allocs = false;
-thread_local long g_allocs = 0;
+namespace {
+thread_local bool t_counting = false;
+thread_local long t_allocs = 0;
+}  // namespace
+
+void start_counting_allocations() {
+  t_allocs = 0;
+  t_counting = true;
+}
+
+long stop_counting_allocations() {
+  t_counting = false;
+  return t_allocs;
+}
 
 void* operator new(std::size_t n) {
-  if (g_count_allocs) ++g_allocs;
+  if (t_counting) ++t_allocs;
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }

@@ -6,6 +6,7 @@
 #include <new>
 #include <thread>
 
+#include "alloc_counter.hpp"
 #include "cairn/node.hpp"
 #include "sensor_msgs/msg/Image.hpp"
 #include "std_msgs/msg/String.hpp"
@@ -16,10 +17,6 @@ using cairn::Node;
 using cairn::NodeOptions;
 using Image = sensor_msgs::msg::Image;
 using String = std_msgs::msg::String;
-
-// Counts heap allocations on this thread while armed (steady-state zero-allocation check).
-extern thread_local bool g_count_allocs;  // test/alloc_counter.cpp
-extern thread_local long g_allocs;
 
 namespace {
 NodeOptions opts(const std::string& name, Executor& e, std::shared_ptr<cairn::Context> ctx = nullptr) {
@@ -70,12 +67,11 @@ TEST(IntraProcess, SameThreadDeliveryRunsInlineWithoutAllocations) {
   auto t = node.create_wall_timer(1ms, [&] {
     if (calls >= 1000) return;
     const int before = calls;
-    g_allocs = 0;
-    g_count_allocs = true;
+    start_counting_allocations();
     for (int i = 0; i < 100; ++i) pub->publish(std::move(slot));
-    g_count_allocs = false;
+    const long allocs = stop_counting_allocations();
     EXPECT_EQ(calls, before + 100) << "inline delivery: the callback ran before publish() returned";
-    EXPECT_EQ(g_allocs, 0) << "steady-state same-thread delivery must not allocate";
+    EXPECT_EQ(allocs, 0) << "steady-state same-thread delivery must not allocate";
   });
   exec.spin_until([&] { return calls >= 1000; }, 5s);
   EXPECT_EQ(calls, 1000);
