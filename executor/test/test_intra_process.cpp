@@ -77,6 +77,20 @@ TEST(IntraProcess, SameThreadDeliveryRunsInlineWithoutAllocations) {
   EXPECT_EQ(calls, 1000);
 }
 
+TEST(IntraProcess, SubscriptionThatDdsRefusesLeavesNothingOnTheChannel) {
+  auto ctx = cairn::Context::create();
+  Executor exec;
+  Node node(opts("n", exec, ctx));
+  int calls = 0;
+  EXPECT_THROW(node.create_subscription<String>("bad topic!!", cairn::QoS{}, [&](const String&) { ++calls; }),
+               std::exception);
+  // Before the fix the half-built subscription stayed on the channel: the channel kept it alive (a reference
+  // cycle, reported by LeakSanitizer) and would have delivered this process's messages to its callback.
+  const auto channel = ctx->intra().channel<String>("/bad topic!!", cairn::msgs::type_support<String>().ros_type_name);
+  EXPECT_EQ(channel->count(), 0u);
+  EXPECT_EQ(calls, 0);
+}
+
 TEST(IntraProcess, FanOutSharesOneObjectAndCopiesOnlyForTheOwner) {
   Executor exec;
   Node node(opts("n", exec));

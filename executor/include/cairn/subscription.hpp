@@ -73,30 +73,15 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
     channel_ = std::move(channel);
     auto self = std::static_pointer_cast<Subscription<T>>(shared_from_this());
     if (channel_) channel_->add(self, qos_.durability == QoS::Durability::TransientLocal);
-    if (dds && ctx) {
-      std::weak_ptr<Subscription<T>> weak = self;
-      reader_ = std::make_unique<DdsReader>(*ctx, dds_topic_name(topic_), msgs::type_support<T>(), qos_, opts,
-                                            [weak](DdsReader& r) {
-                                              auto s = weak.lock();
-                                              if (!s) return;
-                                              if (s->immediate()) {  // on Cyclone's receive thread
-                                                s->guarded([&] { s->drain_dds(); });
-                                                return;
-                                              }
-                                              r.prefetch();  // the woken thread finds them in our queue
-                                              // one wake-up drains everything that has arrived, so a burst
-                                              // costs one queue entry, not one per sample
-                                              if (!s->dds_pending_.exchange(true)) s->exec_->schedule(s);
-                                            });
-      // The reader's first callbacks may have run before reader_ was set (and found nothing to drain):
-      // publish the pointer, then make sure whatever arrived meanwhile is drained.
-      reader_raw_.store(reader_.get(), std::memory_order_release);
-      if (immediate()) {
-        guarded([&] { drain_dds(); });
-      } else {
-        dds_pending_.store(true);
-        exec_->schedule(self);
-      }
+    if (!dds || !ctx) return;
+    try {
+      connect_dds(self, *ctx, opts);
+    } catch (...) {
+      // e.g. DDS refused the topic name: the channel must not keep (and deliver to) a subscription that was
+      // never handed out, nor keep it alive through the channel <-> subscription reference cycle
+      if (channel_) channel_->remove(this);
+      channel_.reset();
+      throw;
     }
   }
 
@@ -179,6 +164,33 @@ class Subscription : public SubscriptionBase, public IntraSink<T> {
   bool immediate() const { return group() && group()->type() == CallbackGroup::Type::Immediate; }
 
  private:
+  // The DDS leg of connect().
+  void connect_dds(const std::shared_ptr<Subscription<T>>& self, Context& ctx, const DdsEndpointOptions& opts) {
+    std::weak_ptr<Subscription<T>> weak = self;
+    reader_ = std::make_unique<DdsReader>(ctx, dds_topic_name(topic_), msgs::type_support<T>(), qos_, opts,
+                                          [weak](DdsReader& r) {
+                                            auto s = weak.lock();
+                                            if (!s) return;
+                                            if (s->immediate()) {  // on Cyclone's receive thread
+                                              s->guarded([&] { s->drain_dds(); });
+                                              return;
+                                            }
+                                            r.prefetch();  // the woken thread finds them in our queue
+                                            // one wake-up drains everything that has arrived, so a burst
+                                            // costs one queue entry, not one per sample
+                                            if (!s->dds_pending_.exchange(true)) s->exec_->schedule(s);
+                                          });
+    // The reader's first callbacks may have run before reader_ was set (and found nothing to drain):
+    // publish the pointer, then make sure whatever arrived meanwhile is drained.
+    reader_raw_.store(reader_.get(), std::memory_order_release);
+    if (immediate()) {
+      guarded([&] { drain_dds(); });
+    } else {
+      dds_pending_.store(true);
+      exec_->schedule(self);
+    }
+  }
+
   struct Item {
     std::variant<std::unique_ptr<T>, std::shared_ptr<const T>> msg;
     MessageInfo info;
