@@ -29,6 +29,8 @@ const Track* nearest(const std::vector<Track>& tracks, const Eigen::Vector2d& p)
     if (!best || (t.position() - p).norm() < (best->position() - p).norm()) best = &t;
   return best;
 }
+// A pointer into a temporary (e.g. confirmedTracks(), which returns by value) would dangle.
+const Track* nearest(std::vector<Track>&& tracks, const Eigen::Vector2d& p) = delete;
 }  // namespace
 
 TEST(Assignment, SolvesSquareAndRectangularProblems) {
@@ -250,7 +252,7 @@ TEST(Tracker, CoastingTrackDoesNotReachSidewaysForANeighboursLeg) {
       const Eigen::Vector2d pred(1.1, 0.0);
       const Eigen::Vector2d leg = pred + (sideways ? Eigen::Vector2d(0.0, 0.6) : Eigen::Vector2d(0.6, 0.0));
       tracker.updateLegs(1.1, {{leg, 0.9, 0.12}}, Pose2{}, dp);
-      const Track& t = tracker.confirmedTracks().at(0);
+      const Track t = tracker.confirmedTracks().at(0);  // a copy: confirmedTracks() returns by value
       const bool took = t.last_update == 1.1;
       EXPECT_EQ(took, !sideways || lateral >= 0.2) << "sideways " << sideways << " lateral " << lateral;
     }
@@ -396,8 +398,9 @@ TEST(Tracker, SingleSwingingLegDoesNotDragAWalkingTrack) {
       tracker.updateLegs(t, legs, Pose2{}, dp);
       if (k < 10) continue;
       const Eigen::Vector2d pa(v * t, 0.0), pb(v * t, 0.7);
-      const Track* ta = nearest(tracker.confirmedTracks(), pa);
-      const Track* tb = nearest(tracker.confirmedTracks(), pb);
+      const std::vector<Track> confirmed = tracker.confirmedTracks();  // by value: keep it while pointing into it
+      const Track* ta = nearest(confirmed, pa);
+      const Track* tb = nearest(confirmed, pb);
       ASSERT_TRUE(ta && tb);
       if (id_a < 0) id_a = ta->id, id_b = tb->id;
       kept = kept && ta->id == id_a && tb->id == id_b && ta->id != tb->id;
