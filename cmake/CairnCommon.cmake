@@ -21,6 +21,15 @@ option(CAIRN_WERROR "Treat warnings as errors (CI turns this on)" OFF)
 option(CAIRN_BUILD_TESTS "Build cairn tests" ON)
 option(CAIRN_BUILD_BENCHMARKS "Build cairn benchmarks" ON)
 option(CAIRN_BUILD_FUZZERS "Build libFuzzer targets (needs clang)" OFF)
+# -DCAIRN_SANITIZE=address,undefined builds everything (executables, component libraries, tests) with those
+# sanitizers, so that the whole test suite can be run under them (docs/CONTRIBUTING.md).
+set(CAIRN_SANITIZE "" CACHE STRING "Sanitizers for every target, e.g. address,undefined (empty: none)")
+if(CAIRN_SANITIZE)
+  # vptr (part of "undefined") is off: components are classes in dlopen'ed libraries whose typeinfo lives only
+  # there, and tools that load one and call into it (cairn-log and the LogPlayer) would not link with it.
+  add_compile_options(-fsanitize=${CAIRN_SANITIZE} -fno-sanitize=vptr -fno-omit-frame-pointer -fno-sanitize-recover=all)
+  add_link_options(-fsanitize=${CAIRN_SANITIZE} -fno-sanitize=vptr)
+endif()
 
 # Warnings for cairn's own targets; third-party headers come in as SYSTEM so they stay quiet.
 function(cairn_target_warnings target)
