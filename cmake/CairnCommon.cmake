@@ -30,6 +30,8 @@ if(CAIRN_SANITIZE)
   add_compile_options(-fsanitize=${CAIRN_SANITIZE} -fno-sanitize=vptr -fno-omit-frame-pointer -fno-sanitize-recover=all)
   add_link_options(-fsanitize=${CAIRN_SANITIZE} -fno-sanitize=vptr)
 endif()
+# Options every test runs with under ThreadSanitizer (test/sanitizers/tsan.supp: Cyclone's own synchronisation).
+set(CAIRN_TSAN_OPTIONS "suppressions=${CMAKE_CURRENT_LIST_DIR}/../test/sanitizers/tsan.supp")
 
 # Warnings for cairn's own targets; third-party headers come in as SYSTEM so they stay quiet.
 function(cairn_target_warnings target)
@@ -79,7 +81,7 @@ function(cairn_add_gtest name)
   endif()
   add_test(NAME ${name} COMMAND ${name})
   set_tests_properties(${name} PROPERTIES TIMEOUT ${ARG_TIMEOUT}
-    ENVIRONMENT "CAIRN_COMPONENT_PATH=${CAIRN_COMPONENT_OUTPUT_DIR}")
+    ENVIRONMENT "CAIRN_COMPONENT_PATH=${CAIRN_COMPONENT_OUTPUT_DIR};TSAN_OPTIONS=${CAIRN_TSAN_OPTIONS}")
 endfunction()
 
 # Installs a package's exported targets (TARGETS plus components added with cairn_add_component) with a
