@@ -70,8 +70,9 @@ Component tools (run as cairn-<verb>):
   bt run <file.xml> ...                behavior trees (components/bt_executive)
 
 Common options: --wait S (topic, node: discovery time, 0-3600 s, default 1.5 s; topic echo/hz: time to find a
-publisher, component: time to find the container(s), default 5 s), --timeout S (param, component: time for the service reply, 0-3600 s, default
-5 s / 15 s). --count is 1-1e12 (default: until Ctrl-C); --duration 0-1e9 s (0, the default: until Ctrl-C).
+publisher, component: time to find the container(s), default 5 s), --timeout S (param, component: time for the
+service reply, 0-3600 s, default 5 s / 15 s). --count is 1-1e12 (default: until Ctrl-C); --duration 0-1e9 s
+(0, the default: until Ctrl-C).
 Environment: CAIRN_DOMAIN_ID / ROS_DOMAIN_ID, CYCLONEDDS_URI, CAIRN_COMPONENT_PATH, CAIRN_LOG_LEVEL.
 )";
 
@@ -339,8 +340,9 @@ auto container_client(Cli& cli, const std::string& container, const std::string&
   if (!client->wait_for_service(wait)) {
     char secs[32];
     std::snprintf(secs, sizeof secs, "%g", wait.count() / 1000.0);
-    throw std::runtime_error("no container " + norm_topic(container) + " found (its " + what + " service was not discovered within " +
-                             secs + " s; --wait S waits longer, `cairn component list` lists the running containers)");
+    throw std::runtime_error("no container " + norm_topic(container) + " found (its " + what +
+                             " service was not discovered within " + secs +
+                             " s; --wait S waits longer, `cairn component list` lists the running containers)");
   }
   return client;
 }
