@@ -35,7 +35,6 @@ using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 using Image = sensor_msgs::msg::Image;
 
-
 namespace {
 
 struct Stats {
