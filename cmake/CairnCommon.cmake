@@ -41,6 +41,14 @@ function(cairn_target_warnings target)
   endif()
 endfunction()
 
+# cmake/include/cairn/strict_number.hpp (the one whole-string number parser) on a target's private include path.
+# Build tree only: it is never installed, so no installed header may include it.
+function(cairn_use_strict_number)
+  foreach(t ${ARGN})
+    target_include_directories(${t} PRIVATE ${CMAKE_CURRENT_FUNCTION_LIST_DIR}/include)
+  endforeach()
+endfunction()
+
 # All executables (cairn, cairn-<verb> tools, tests) of one build tree land in <build>/bin, so that the
 # `cairn` front end finds its `cairn-<verb>` tools next to itself.
 if(NOT CMAKE_RUNTIME_OUTPUT_DIRECTORY)

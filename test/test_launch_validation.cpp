@@ -139,6 +139,14 @@ TEST(LaunchSpec, BadValuesOfKnownKeys) {
   EXPECT_EQ(error_of("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
                      "        qos: {chatter: {reliability: sometimes}}\n"),
             "spec.yaml:5: qos.chatter: qos reliability expects reliable or best_effort, got 'sometimes'");
+  // "inf" and 1e300 s were converted to int64 nanoseconds (undefined behaviour); "+-1" was read as -1
+  for (const char* bad : {"inf", "1e300", "+-1"})
+    EXPECT_EQ(error_of(std::string("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
+                                   "        qos: {chatter: {deadline: '") + bad + "'}}\n"),
+              std::string("spec.yaml:5: qos.chatter: qos deadline expects seconds in [0, 9e9], got '") + bad + "'");
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
+                     "        qos: {chatter: {depth: 99999999999}}\n"),
+            "spec.yaml:5: qos.chatter: qos depth expects an integer >= 1, got '99999999999'");
   EXPECT_EQ(error_of("processes:\n  - name: p\n"), "spec.yaml:2: process.cmd: expected a non-empty list");
   EXPECT_EQ(error_of("[1, 2]\n"), "spec.yaml:1: a launch spec is a map with 'containers' and/or 'processes'");
   EXPECT_EQ(error_of("containers:\n  - name: 9lives\n"), "spec.yaml:2: container.name: '9lives' is not a valid node name");

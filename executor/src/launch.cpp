@@ -5,7 +5,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -20,6 +19,7 @@
 
 #include "cairn/container.hpp"
 #include "cairn/parameter_msgs.hpp"
+#include "cairn/strict_number.hpp"
 #include "composition_interfaces/srv/LoadNode.hpp"
 
 namespace cairn {
@@ -270,15 +270,7 @@ double RespawnPolicy::delay_for(int consecutive) const {
   return std::min(d, std::max(delay_s, 30.0));
 }
 
-std::optional<double> parse_number(const std::string& text) {
-  const char* b = text.data();
-  const char* e = b + text.size();
-  if (b != e && *b == '+') ++b;  // as YAML and strtod allow
-  double v = 0;
-  const auto [end, ec] = std::from_chars(b, e, v);
-  if (b == e || ec != std::errc() || end != e || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
+std::optional<double> parse_number(const std::string& text) { return strict_number::parse_finite(text); }
 
 double option_number(const std::string& option, const std::string& text, double lo, double hi, bool integer) {
   const auto v = parse_number(text);

@@ -5,6 +5,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "cairn/strict_number.hpp"
+
 namespace cairn {
 
 ParameterType type_of(const ParameterValue& v) { return static_cast<ParameterType>(v.index()); }
@@ -79,18 +81,10 @@ ParameterValue scalar_from_yaml(const YAML::Node& n) {
   if (n.Tag() == "!" ) return s;  // quoted string
   bool b;
   if (YAML::convert<bool>::decode(n, b) && (s == "true" || s == "false" || s == "True" || s == "False")) return b;
-  try {
-    std::size_t pos = 0;
-    long long i = std::stoll(s, &pos, 10);
-    if (pos == s.size()) return static_cast<int64_t>(i);
-  } catch (...) {
-  }
-  try {
-    std::size_t pos = 0;
-    double d = std::stod(s, &pos);
-    if (pos == s.size()) return d;
-  } catch (...) {
-  }
+  // A plain scalar that is a whole number is an integer, one that is a finite number a double, anything else
+  // (also "nan", "inf", "0x10", "5 m") a string, which the parameter's declared type then rejects by name.
+  if (const auto i = strict_number::parse_integer(s)) return static_cast<int64_t>(*i);
+  if (const auto d = strict_number::parse_finite(s)) return *d;
   return s;
 }
 }  // namespace

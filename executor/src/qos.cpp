@@ -1,6 +1,9 @@
 #include "cairn/qos.hpp"
 
+#include <limits>
 #include <sstream>
+
+#include "cairn/strict_number.hpp"
 
 #include "dds/dds.h"
 
@@ -102,31 +105,28 @@ void QoSOverride::apply(QoS& q) const {
   if (lifespan) q.lifespan = *lifespan;
 }
 
+namespace {
+constexpr double kMaxQoSSeconds = 9e9;  // < 2^63 ns
+}  // namespace
+
 std::optional<std::string> QoSOverride::set(const std::string& key, const std::string& value) {
   auto seconds = [&](std::optional<std::chrono::nanoseconds>& out) -> std::optional<std::string> {
-    try {
-      std::size_t pos = 0;
-      const double s = std::stod(value, &pos);
-      if (pos != value.size() || s < 0) throw std::invalid_argument(value);
-      out = std::chrono::nanoseconds(static_cast<int64_t>(s * 1e9));
-      return std::nullopt;
-    } catch (...) {
-      return "qos " + key + " expects seconds >= 0, got '" + value + "'";
-    }
+    // At most kMaxQoSSeconds: the duration must fit DDS's 64-bit nanoseconds ("inf" or 1e300 used to overflow).
+    const auto s = strict_number::parse_finite(value);
+    if (!s || *s < 0 || *s > kMaxQoSSeconds)
+      return "qos " + key + " expects seconds in [0, 9e9], got '" + value + "'";
+    out = std::chrono::nanoseconds(static_cast<int64_t>(*s * 1e9));
+    return std::nullopt;
   };
   if (key == "history") {
     if (value == "keep_last") history = QoS::History::KeepLast;
     else if (value == "keep_all") history = QoS::History::KeepAll;
     else return "qos history expects keep_last or keep_all, got '" + value + "'";
   } else if (key == "depth") {
-    try {
-      std::size_t pos = 0;
-      const int d = std::stoi(value, &pos);
-      if (pos != value.size() || d < 1) throw std::invalid_argument(value);
-      depth = d;
-    } catch (...) {
+    const auto d = strict_number::parse_integer(value);
+    if (!d || *d < 1 || *d > std::numeric_limits<int>::max())
       return "qos depth expects an integer >= 1, got '" + value + "'";
-    }
+    depth = static_cast<int>(*d);
   } else if (key == "reliability") {
     if (value == "reliable") reliability = QoS::Reliability::Reliable;
     else if (value == "best_effort") reliability = QoS::Reliability::BestEffort;

@@ -30,6 +30,7 @@
 #include "cairn/dds.hpp"
 #include "cairn/data_files.hpp"
 #include "cairn/msgs/type_support.hpp"
+#include "cairn/strict_number.hpp"
 #include "cairn_bt_msgs/msg/TreeEvent.hpp"
 #include "cairn_bt_msgs/msg/TreeStatus.hpp"
 #include "cairn_bt_msgs/srv/ExecutiveCommand.hpp"
@@ -914,9 +915,8 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
     for (std::size_t i = 0; i < topics.size(); ++i) {
       const auto w = splitWords(topics[i]);
       const std::string where = "monitor.topics[" + std::to_string(i) + "]";
-      char* end = nullptr;
-      const double hz = w.size() == 4 ? std::strtod(w[2].c_str(), &end) : 0.0;
-      if (w.size() != 4 || end == nullptr || *end != '\0' || !(hz > 0.0))
+      const double hz = w.size() == 4 ? cairn::strict_number::parse_finite(w[2]).value_or(0.0) : 0.0;
+      if (!(hz > 0.0))
         throw std::invalid_argument(where + ": expected '<topic> <type> <expected_hz> <component>', got '" + topics[i] + "'");
       const cairn::msgs::TypeSupport* ts = typeSupport(w[1], where);
       auto& mon = monitors_.emplace<m::TopicRateMonitor>({}, node_.resolve_name(w[0]), w[3], hz);
@@ -929,9 +929,8 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
       double v[4] = {0, 0, 0, 0};
       bool ok = w.size() == 5;
       for (std::size_t k = 0; ok && k < 4; ++k) {
-        char* end = nullptr;
-        v[k] = std::strtod(w[k + 1].c_str(), &end);
-        ok = end != w[k + 1].c_str() && *end == '\0' && v[k] > 0.0;
+        v[k] = cairn::strict_number::parse_finite(w[k + 1]).value_or(0.0);
+        ok = v[k] > 0.0;
       }
       if (!ok || v[0] > v[1] || v[2] > v[3])
         throw std::invalid_argument(where + ": expected '<container> <cpu_warn_%> <cpu_error_%> <ram_warn_mb> "
@@ -950,10 +949,9 @@ class DdsSystem final : public bt::monitoring::RecoveryInterface {
     for (std::size_t i = 0; i < clocks.size(); ++i) {
       const auto w = splitWords(clocks[i]);
       const std::string where = "monitor.clocks[" + std::to_string(i) + "]";
-      char *e1 = nullptr, *e2 = nullptr;
-      const double warn = w.size() == 4 ? std::strtod(w[2].c_str(), &e1) : 0.0;
-      const double err = w.size() == 4 ? std::strtod(w[3].c_str(), &e2) : 0.0;
-      if (w.size() != 4 || *e1 != '\0' || *e2 != '\0' || !(warn > 0.0) || !(err >= warn))
+      const double warn = w.size() == 4 ? cairn::strict_number::parse_finite(w[2]).value_or(0.0) : 0.0;
+      const double err = w.size() == 4 ? cairn::strict_number::parse_finite(w[3]).value_or(0.0) : 0.0;
+      if (!(warn > 0.0) || !(err >= warn))
         throw std::invalid_argument(where + ": expected '<topic> <type> <warn_ms> <error_ms>' (0 < warn <= error), got '" +
                                     clocks[i] + "'");
       const cairn::msgs::TypeSupport* ts = typeSupport(w[1], where);

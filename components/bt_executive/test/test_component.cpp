@@ -749,6 +749,8 @@ TEST(BtComponentLaunch, BadServiceRequestAndMonitorSpecsFailValidation) {
   EXPECT_NE(e.find("port 'request': expected true or false"), std::string::npos) << e;
   e = launchError("{monitor.topics: ['/chatter std_msgs/String fast /talker']}");
   EXPECT_NE(e.find("monitor.topics[0]: expected '<topic> <type> <expected_hz> <component>'"), std::string::npos) << e;
+  e = launchError("{monitor.topics: ['/chatter std_msgs/String inf /talker']}");  // an infinite expected rate was taken
+  EXPECT_NE(e.find("monitor.topics[0]: expected '<topic> <type> <expected_hz> <component>'"), std::string::npos) << e;
   e = launchError("{monitor.topics: ['/chatter std_msgs/Nope 10 /talker']}");
   EXPECT_NE(e.find("monitor.topics[0]: unknown message type 'std_msgs/Nope'"), std::string::npos) << e;
   e = launchError("{monitor.components: ['talker']}");

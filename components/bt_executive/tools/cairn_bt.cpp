@@ -7,7 +7,6 @@
 //   cairn-bt model                          <TreeNodesModel> of the built-in nodes
 //   cairn-bt psbt-eval [--starts N] [--seed S] [--n-pl N] [--hotspots K] [--xml FILE]
 //                                           model-based comparison of Stüde §5.4.4 on a synthetic 50 m x 25 m map
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -26,6 +25,7 @@
 #include "cairn/bt_executive/psbt.hpp"
 #include "cairn/bt_executive/trace.hpp"
 #include "cairn/bt_executive/xml_loader.hpp"
+#include "cairn/strict_number.hpp"
 #ifdef CAIRN_BT_WITH_RUNTIME
 #include <condition_variable>
 #include <deque>
@@ -80,26 +80,24 @@ const char* optionValue(int argc, char** argv, int& i) {
 long intOption(int argc, char** argv, int& i, long lo, long hi) {
   const std::string opt = argv[i];
   const std::string_view v = optionValue(argc, argv, i);
-  long x = 0;
-  const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
-  if (v.empty() || ec != std::errc() || end != v.data() + v.size() || x < lo || x > hi)
+  const auto x = cairn::strict_number::parse_integer(v);
+  if (!x || *x < lo || *x > hi)
     throw UsageError(opt + " needs an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" +
                      std::string(v) + "'");
-  return x;
+  return static_cast<long>(*x);
 }
 
 /// The number (finite, decimal) after the option argv[i], which must lie in [lo, hi] (advances i).
 double numberOption(int argc, char** argv, int& i, double lo, double hi) {
   const std::string opt = argv[i];
   const std::string_view v = optionValue(argc, argv, i);
-  double x = 0;
-  const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
-  if (v.empty() || ec != std::errc() || end != v.data() + v.size() || !std::isfinite(x) || x < lo || x > hi) {
+  const auto x = cairn::strict_number::parse_finite(v);
+  if (!x || *x < lo || *x > hi) {
     char range[64];
     std::snprintf(range, sizeof range, "[%g, %g]", lo, hi);
     throw UsageError(opt + " needs a number in " + range + ", got '" + std::string(v) + "'");
   }
-  return x;
+  return *x;
 }
 
 /// The whole content of `file`; throws UsageError("FILE: ...") for a directory or a read error.

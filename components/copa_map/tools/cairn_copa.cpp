@@ -19,6 +19,7 @@
 #include "cairn/copa_map/copa_map.hpp"
 #include "cairn/copa_map/io.hpp"
 #include "cairn/copa_map/metrics.hpp"
+#include "cairn/strict_number.hpp"
 #include "image_io.hpp"
 
 using namespace cairn::copa_map;
@@ -196,10 +197,9 @@ void applyConfig(const std::string& path, CopaMapConfig& mc, TrainConfig& tc) {
     for (const ConfigKey& c : kConfigKeys)
       if (key == c.name) k = &c;
     if (k == nullptr) throw InputError(path, ln, "unknown key '" + key + "'");
-    char* end = nullptr;
-    const double v = std::strtod(val.c_str(), &end);
-    if (end == val.c_str() || *end != '\0' || !std::isfinite(v))
-      throw InputError(path, ln, "value of '" + key + "' is not a number: '" + val + "'");
+    const auto parsed = cairn::strict_number::parse_finite(val);
+    if (!parsed) throw InputError(path, ln, "value of '" + key + "' is not a number: '" + val + "'");
+    const double v = *parsed;
     if (k->kind == ConfigKey::kFlag && v != 0 && v != 1)
       throw InputError(path, ln, "value of '" + key + "' must be 0 or 1, got '" + val + "'");
     if (k->kind == ConfigKey::kInt && v != std::floor(v))
@@ -350,10 +350,9 @@ std::vector<double> parseList(const std::string& s, const std::string& what) {
   while (true) {
     const auto comma = s.find(',', pos);
     const std::string tok = trim(s.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos));
-    char* end = nullptr;
-    const double d = std::strtod(tok.c_str(), &end);
-    if (end == tok.c_str() || *end != '\0' || !std::isfinite(d)) throw UsageError("bad number '" + tok + "' in " + what);
-    v.push_back(d);
+    const auto d = cairn::strict_number::parse_finite(tok);
+    if (!d) throw UsageError("bad number '" + tok + "' in " + what);
+    v.push_back(*d);
     if (comma == std::string::npos) break;
     pos = comma + 1;
   }

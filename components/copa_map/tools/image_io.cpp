@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "cairn/copa_map/io.hpp"
+#include "cairn/strict_number.hpp"
 
 namespace cairn::copa_map::tools {
 namespace {
@@ -20,11 +21,9 @@ long lineOf(const YAML::Node& n) { return std::max(0, n.Mark().line + 1); }
 // A finite number, or InputError naming the file, line and key.
 double yamlNumber(const std::string& path, const YAML::Node& n, const std::string& key) {
   const std::string text = n.IsScalar() ? n.Scalar() : std::string();
-  char* end = nullptr;
-  const double x = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(x))
-    throw InputError(path, lineOf(n), "'" + key + "' expects a number, got '" + text + "'");
-  return x;
+  const auto x = cairn::strict_number::parse_finite(text);
+  if (!x) throw InputError(path, lineOf(n), "'" + key + "' expects a number, got '" + text + "'");
+  return *x;
 }
 }  // namespace
 

@@ -12,6 +12,7 @@
 
 #include "cairn/sim/carmen.hpp"
 #include "cairn/sim/world.hpp"  // InputError
+#include "cairn/strict_number.hpp"
 
 namespace cairn::graph_slam {
 namespace {
@@ -24,10 +25,9 @@ bool parseNumbers(const std::string& line, std::vector<double>& out) {
   std::istringstream in(line);
   std::string tok;
   while (in >> tok) {
-    char* end = nullptr;
-    const double v = std::strtod(tok.c_str(), &end);
-    if (end == tok.c_str() || *end != '\0' || !std::isfinite(v)) return false;
-    out.push_back(v);
+    const auto v = strict_number::parse_finite(tok);
+    if (!v) return false;
+    out.push_back(*v);
   }
   return true;
 }

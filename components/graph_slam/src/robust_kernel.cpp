@@ -1,8 +1,9 @@
 #include "cairn/graph_slam/robust_kernel.hpp"
 
-#include <charconv>
 #include <cmath>
 #include <stdexcept>
+
+#include "cairn/strict_number.hpp"
 
 namespace cairn::graph_slam {
 
@@ -75,9 +76,9 @@ RobustKernel RobustKernel::parse(std::string_view text) {
   }
   if (colon != std::string_view::npos) {
     const std::string_view value = text.substr(colon + 1);
-    double d = 0.0;
-    const auto [ptr, ec] = std::from_chars(value.data(), value.data() + value.size(), d);
-    if (ec != std::errc() || ptr != value.data() + value.size() || !std::isfinite(d) || d <= 0.0) {
+    const auto parsed = strict_number::parse_finite(value);
+    const double d = parsed.value_or(0.0);
+    if (!(d > 0.0)) {
       throw std::invalid_argument("robust kernel parameter must be a positive number, got '" +
                                   std::string(value) + "'");
     }

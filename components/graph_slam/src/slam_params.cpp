@@ -4,8 +4,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <optional>
 #include <stdexcept>
+
+#include "cairn/strict_number.hpp"
 
 namespace cairn::graph_slam {
 namespace {
@@ -115,18 +118,6 @@ std::vector<SlamParam> makeTable() {
   return t;
 }
 
-// The whole string as a number (std::stod / std::stol), or nullopt (empty, trailing text, out of range).
-template <typename T, typename Parse>
-std::optional<T> parseWhole(const std::string& text, Parse parse) {
-  std::size_t pos = 0;
-  try {
-    const T v = parse(text, &pos);
-    if (!text.empty() && pos == text.size()) return v;
-  } catch (const std::exception&) {
-  }
-  return std::nullopt;
-}
-
 bool parseBool(const std::string& v, bool& out) {
   if (v == "true" || v == "True" || v == "1" || v == "yes") return out = true, true;
   if (v == "false" || v == "False" || v == "0" || v == "no") return out = false, true;
@@ -152,20 +143,19 @@ void setSlamParameter(SlamOptions& options, const std::string& name, const std::
   const SlamParamRef ref = p->ref(options);
   auto range = [&](double v) {
     if (v >= p->min && v <= p->max) return;
-    if (std::isnan(v)) throw std::invalid_argument(name + ": expected a number, got '" + value + "'");
     char buf[64];  // %g: the unbounded default range prints as [-1e+300, 1e+300], not 300 digits
-
     std::snprintf(buf, sizeof buf, "[%g, %g]", p->min, p->max);
     throw std::invalid_argument(name + ": " + value + " is outside " + buf);
   };
   if (auto* d = std::get_if<double*>(&ref)) {
-    const auto v = parseWhole<double>(value, [](const std::string& t, std::size_t* pos) { return std::stod(t, pos); });
+    const auto v = strict_number::parse_finite(value);
     if (!v) throw std::invalid_argument(name + ": expected a number, got '" + value + "'");
     range(*v);
     **d = *v;
   } else if (auto* i = std::get_if<int*>(&ref)) {
-    const auto v = parseWhole<long>(value, [](const std::string& t, std::size_t* pos) { return std::stol(t, pos); });
-    if (!v) throw std::invalid_argument(name + ": expected an integer, got '" + value + "'");
+    const auto v = strict_number::parse_integer(value);
+    if (!v || *v < std::numeric_limits<int>::min() || *v > std::numeric_limits<int>::max())
+      throw std::invalid_argument(name + ": expected an integer, got '" + value + "'");
     range(static_cast<double>(*v));
     **i = static_cast<int>(*v);
   } else if (auto* b = std::get_if<bool*>(&ref)) {

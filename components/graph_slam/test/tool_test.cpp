@@ -82,6 +82,12 @@ TEST(Tool, BadInputGivesFileLineAndExitCode2) {
   r = run("optimize " + bad + " --solver newton");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("unknown solver 'newton'"), std::string::npos);
+  for (const char* t : {"inf", "-1", "0.5x"}) {  // an infinite GNC inlier threshold was accepted
+    r = run("optimize " + bad + " --robust gnc:" + t);
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find(std::string("gnc threshold must be a positive number, got '") + t + "'"), std::string::npos)
+        << r.err;
+  }
 }
 
 namespace {
@@ -159,6 +165,9 @@ TEST(Tool, RunAndEvalRejectBadOptionsAndFiles) {
   r = run("run --carmen " + log + " --out " + out + " --set laser_x=nan");
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(r.err, "cairn: slam: laser_x: expected a number, got 'nan'\n");
+  r = run("run --carmen " + log + " --out " + out + " --set laser_x=inf");  // was taken as a number outside the range
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: slam: laser_x: expected a number, got 'inf'\n");
   r = run("run --carmen " + log + " --out " + out + " --set r_min=5000");
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(r.err, "cairn: slam: r_min: 5000 is outside [0, 1000]\n");

@@ -76,11 +76,10 @@ int optimizeVerb(const std::vector<std::string>& args) {
         if (v == "gnc" || v.rfind("gnc:", 0) == 0) {
           gnc = true;
           if (v.size() > 4) {
-            char* end = nullptr;
-            gnc_opt.inlier_threshold = std::strtod(v.c_str() + 4, &end);
-            if (*end != '\0' || !(gnc_opt.inlier_threshold > 0.0)) {
+            const auto t = cairn::strict_number::parse_finite(v.substr(4));
+            if (!t || !(*t > 0.0))
               throw std::invalid_argument("gnc threshold must be a positive number, got '" + v.substr(4) + "'");
-            }
+            gnc_opt.inlier_threshold = *t;
           }
         } else {
           kernel = gs::RobustKernel::parse(v);

@@ -4,8 +4,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 #include <string>
+
+#include "cairn/strict_number.hpp"
 
 namespace cairn::slam_cli {
 
@@ -58,32 +61,19 @@ class JsonObject {
   std::string body_;
 };
 
-/// Whole-string integer; throws std::invalid_argument "<what> must be an integer, got '<s>'".
+/// Whole-string integer that fits an int; throws std::invalid_argument "<what> must be an integer, got '<s>'".
 inline int parseInt(const std::string& s, const char* what) {
-  std::size_t pos = 0;
-  int v = 0;
-  try {
-    v = std::stoi(s, &pos);
-  } catch (const std::exception&) {
-    pos = 0;
-  }
-  if (pos != s.size() || s.empty())
+  const auto v = strict_number::parse_integer(s);
+  if (!v || *v < std::numeric_limits<int>::min() || *v > std::numeric_limits<int>::max())
     throw std::invalid_argument(std::string(what) + " must be an integer, got '" + s + "'");
-  return v;
+  return static_cast<int>(*v);
 }
 
 /// Whole-string finite number; throws std::invalid_argument like parseInt.
 inline double parseDouble(const std::string& s, const char* what) {
-  std::size_t pos = 0;
-  double v = 0;
-  try {
-    v = std::stod(s, &pos);
-  } catch (const std::exception&) {
-    pos = 0;
-  }
-  if (pos != s.size() || s.empty() || !std::isfinite(v))
-    throw std::invalid_argument(std::string(what) + " must be a number, got '" + s + "'");
-  return v;
+  const auto v = strict_number::parse_finite(s);
+  if (!v) throw std::invalid_argument(std::string(what) + " must be a number, got '" + s + "'");
+  return *v;
 }
 
 }  // namespace cairn::slam_cli

@@ -1,16 +1,15 @@
 // Parsers shared by the `cairn people` verbs' command-line options: numbers and comma-separated lists.
 #pragma once
 
-#include <cerrno>
 #include <climits>
 #include <cmath>
-#include <cstdlib>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "cairn/people_tracking/param_ranges.hpp"
 #include "cairn/people_tracking/scan.hpp"  // InputError
+#include "cairn/strict_number.hpp"
 
 namespace cairn::people_tracking {
 
@@ -19,23 +18,19 @@ inline constexpr long long kMaxSeed = LLONG_MAX;
 
 // The value of `option` as a finite number; InputError ("option --x expects a (finite) number, got '…'") otherwise.
 inline double parseNumber(const std::string& option, const std::string& text) {
-  char* end = nullptr;
-  const double x = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0') throw InputError("option " + option + " expects a number, got '" + text + "'");
-  if (!std::isfinite(x)) throw InputError("option " + option + " expects a finite number, got '" + text + "'");
-  return x;
+  const auto x = strict_number::parse_finite(text);
+  if (!x) throw InputError("option " + option + " expects a finite number, got '" + text + "'");
+  return *x;
 }
 
 // The value of `option` as an integer in [lo, hi]; InputError ("option --x expects an integer in [lo, hi], got
 // '…'") otherwise: no fractions ("2.5"), trailing text, or values out of range (also none that overflow).
 inline long long parseInteger(const std::string& option, const std::string& text, long long lo, long long hi) {
-  char* end = nullptr;
-  errno = 0;
-  const long long x = std::strtoll(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || errno == ERANGE || x < lo || x > hi)
+  const auto x = strict_number::parse_integer(text);
+  if (!x || *x < lo || *x > hi)
     throw InputError("option " + option + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
                      "], got '" + text + "'");
-  return x;
+  return *x;
 }
 
 // The value of `option`, which sets the core parameter `param` (param_ranges.hpp, the component's ranges), as a

@@ -22,6 +22,7 @@
 
 #include "cairn/sim/carmen.hpp"
 #include "cairn/sim/log_playback.hpp"
+#include "cairn/strict_number.hpp"
 #ifdef CAIRN_LOG_HAVE_RUNTIME
 #include <unistd.h>
 
@@ -177,10 +178,9 @@ int main(int argc, char** argv) {
     return argv[++i];
   };
   const auto number = [&](const std::string& a, const std::string& v) {
-    char* end = nullptr;
-    const double x = std::strtod(v.c_str(), &end);
-    if (v.empty() || *end || !std::isfinite(x) || x < 0) usageError(a + ": '" + v + "' is not a number >= 0");
-    return x;
+    const auto x = cairn::strict_number::parse_finite(v);
+    if (!x || *x < 0) usageError(a + ": '" + v + "' is not a number >= 0");
+    return *x;
   };
   // ranges of the LogPlayer component's parameters
   const auto count = [&](const std::string& a, const std::string& v, double max) {

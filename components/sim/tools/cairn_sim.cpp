@@ -4,7 +4,6 @@
 //   cairn-sim run --world <name|file> --duration <s> --seed N --out <dir> [...]
 // Bad input: one line `cairn: <file>:<line>: <what>` on stderr, exit code 2.
 #include <algorithm>
-#include <cerrno>
 #include <climits>
 #include <chrono>
 #include <ctime>
@@ -28,6 +27,7 @@
 #include "cairn/sim/rng.hpp"
 #include "cairn/sim/simulator.hpp"
 #include "cairn/sim/world.hpp"
+#include "cairn/strict_number.hpp"
 
 using namespace cairn::sim;
 
@@ -40,10 +40,9 @@ namespace {
 
 // Option values: a finite number, or an integer in [lo, hi]; anything else is a usage error naming verb and option.
 double numberArg(const std::string& verb, const std::string& option, const std::string& v) {
-  char* end = nullptr;
-  const double d = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end || !std::isfinite(d)) usageError(verb + ": " + option + " expects a number, got '" + v + "'");
-  return d;
+  const auto d = cairn::strict_number::parse_finite(v);
+  if (!d) usageError(verb + ": " + option + " expects a number, got '" + v + "'");
+  return *d;
 }
 
 // A finite number in [lo, hi]; the range is in the message.
@@ -59,13 +58,11 @@ double numberArg(const std::string& verb, const std::string& option, const std::
 
 long long integerArg(const std::string& verb, const std::string& option, const std::string& v, long long lo,
                      long long hi) {
-  char* end = nullptr;
-  errno = 0;
-  const long long x = std::strtoll(v.c_str(), &end, 10);
-  if (v.empty() || *end || errno == ERANGE || x < lo || x > hi)
+  const auto x = cairn::strict_number::parse_integer(v);
+  if (!x || *x < lo || *x > hi)
     usageError(verb + ": " + option + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
                "], got '" + v + "'");
-  return x;
+  return *x;
 }
 constexpr long long kMaxSeed = LLONG_MAX;
 // Longest simulated span of `run` and `people` (about 3 years): keeps step and row counts far from overflow.

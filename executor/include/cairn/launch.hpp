@@ -86,7 +86,8 @@ void validate_launch_spec(const LaunchSpec& spec, ComponentLoader& loader);
 std::string launch_spec_error(const std::string& text, const std::string& file);
 
 /// Strict number (launch spec values and command-line options): the whole text is a finite decimal number;
-/// otherwise std::nullopt ("5 6", "abc", "nan", "inf", "" are not numbers).
+/// otherwise std::nullopt ("5 6", "abc", "nan", "inf", "" are not numbers). The parser every cairn package
+/// shares (cmake/include/cairn/strict_number.hpp), exported here for code built outside the source tree.
 std::optional<double> parse_number(const std::string& text);
 /// Bad command-line input ("cairn: <verb>: <what>", exit 2).
 class OptionError : public std::invalid_argument {
