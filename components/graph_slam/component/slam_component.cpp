@@ -83,7 +83,7 @@ class SlamNode : public cairn::Node {
     use_odom_ = declare_parameter<bool>("use_odom", true, D{"use `odom` as the motion prior (false: constant velocity)", {}, {}, true});
     odom_tolerance_ = declare_parameter<double>("odom_tolerance", 0.2, D{"s, largest scan-odometry stamp difference", 0.0, 5.0, true});
     tf_timeout_ = declare_parameter<double>("tf_timeout", 2.0, D{"s of scans to wait for base->laser TF before using laser_x/y/theta", 0.0, 60.0, true});
-    map_period_ = declare_parameter<double>("map_publish_period", 5.0, D{"s between map rebuilds (also after each optimization)", 0.1, 3600.0, true});
+    map_period_ = declare_parameter<double>("map_publish_period", 5.0, D{"s, least time between map rebuilds (a rebuild follows new nodes or an optimization)", 0.1, 3600.0, true});
     const std::string load = declare_parameter<std::string>("load_state", "", D{"state file to start from (empty: new map)", {}, {}, true});
 
     if (!load.empty()) {
@@ -183,11 +183,17 @@ class SlamNode : public cairn::Node {
     }
     publishPose(m.header.stamp, *u);
     publishTf(m.header.stamp);
+    // The map is rebuilt from every node's scan (GraphSlam::map(), O(nodes)), so it is rebuilt at most once per
+    // map_publish_period even when optimizations come faster: on a patrol over mapped ground the graph is
+    // re-optimized about once a second and a rebuild after each one grew to most of this thread's time (the
+    // demo's endurance run, docs/benchmarks.md). A change (new node, optimization) waits for the next due scan.
+    map_dirty_ = map_dirty_ || u->node_added || u->optimized;
     const bool map_due = stamp - last_map_stamp_ >= map_period_ || stamp < last_map_stamp_;
-    if (u->node_added && (u->optimized || map_due)) {
+    if (map_dirty_ && map_due) {
       publishMap(m.header.stamp);
       publishGraph(m.header.stamp);
       last_map_stamp_ = stamp;
+      map_dirty_ = false;
     }
   }
 
@@ -289,6 +295,7 @@ class SlamNode : public cairn::Node {
       rs.nodes = static_cast<uint32_t>(slam_->nodes().size());
       rs.message = "loaded " + std::to_string(rs.nodes) + " nodes from " + rq.path;
       last_map_stamp_ = -1e18;
+      map_dirty_ = true;  // the loaded map goes out with the next scan (also in localization-only mode)
     } catch (const std::exception& e) {
       rs.success = false;
       rs.message = e.what();
@@ -320,6 +327,7 @@ class SlamNode : public cairn::Node {
   bool mount_known_ = false;
   std::optional<double> first_scan_stamp_;
   double last_map_stamp_ = -1e18;
+  bool map_dirty_ = true;  ///< nodes added or poses optimized since the last map (true: a loaded map goes out)
   std::chrono::steady_clock::time_point last_warning_{};
   std::shared_ptr<cairn::TransformBuffer> tf_buffer_;
   std::unique_ptr<cairn::TransformListener> tf_listener_;

@@ -76,6 +76,7 @@ TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
   cairn::LoadRequest req{"cairn_graph_slam::SlamNode", "slam"};
   req.parameters["use_verifier"] = false;
   req.parameters["map_publish_period"] = 1.0;
+  req.parameters["optimize_every_n_nodes"] = 1;  // an optimization after every node: the map must still wait 1 s
   req.parameters["laser_theta"] = 1.0;  // wrong on purpose: the TF below (identity) must win
   const auto loaded = container.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
@@ -102,6 +103,12 @@ TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
   auto save = n.create_client<cairn_slam_msgs::srv::SaveState_Request, cairn_slam_msgs::srv::SaveState_Response>("slam/save_state");
   auto load = n.create_client<cairn_slam_msgs::srv::LoadState_Request, cairn_slam_msgs::srv::LoadState_Response>("slam/load_state");
   auto optimize = n.create_client<cairn_slam_msgs::srv::Optimize_Request, cairn_slam_msgs::srv::Optimize_Response>("slam/optimize");
+  std::vector<double> map_stamps;  // of the maps published while the scans come in
+  auto map_counter = n.create_subscription<nav_msgs::msg::OccupancyGrid>(
+      "map", cairn::QoS::latched().keep_last(500), [&](const nav_msgs::msg::OccupancyGrid& m) {
+        std::lock_guard l(mu);
+        map_stamps.push_back(m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec);
+      });
   robot.start();
   ASSERT_TRUE(wait_for([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s));
 
@@ -141,6 +148,11 @@ TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
   EXPECT_GT(tfs.load(), published / 2);
   {
     std::lock_guard l(mu);
+    // Rebuilt at most once per map_publish_period (1 s) although every node was followed by an optimization
+    // (it used to be rebuilt after each one: ~4 maps per simulated second here).
+    EXPECT_GE(map_stamps.size(), 10u);
+    for (std::size_t i = 1; i < map_stamps.size(); ++i)
+      EXPECT_GE(map_stamps[i] - map_stamps[i - 1], 0.999) << "maps " << i - 1 << " and " << i;
     // The robot drove ~12 m along the corridor from (2, 12.55): the pose (map = first odometry frame) moved too.
     const auto& p = last_pose.pose.pose.position;
     EXPECT_GT(std::hypot(p.x, p.y), 5.0);
