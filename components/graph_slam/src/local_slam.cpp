@@ -207,4 +207,9 @@ std::vector<std::shared_ptr<const Submap>> LocalSlam::takeNewlyFinished() {
   return out;
 }
 
+void LocalSlam::releaseFinished() {
+  finished_.clear();
+  newly_finished_from_ = 0;
+}
+
 }  // namespace cairn::graph_slam

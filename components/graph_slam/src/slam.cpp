@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
@@ -59,6 +60,7 @@ void GraphSlam::Impl::startTrajectory() {
   local = std::make_unique<LocalSlam>(options.local);
   submap_base = static_cast<int>(submaps.size());
   last_node.reset();
+  localized_at.reset();
   cov_since_loop.setZero();
   pending_global.clear();
   links = 0;
@@ -124,6 +126,25 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
     localizeScan(*r, scan, update);
     return update;
   }
+  if (r->inserted && last_node && options.revisit_radius > 0.0)
+    revisit_anchor = linked ? mappedNodeNear(compose(map_to_local, r->local_pose), r->stamp) : std::nullopt;
+  if (revisit_anchor) {
+    // Mapped ground (revisit_radius): no node; the scan is matched against the map instead, as in
+    // localization-only mode, and recorded relative to the nearest mapped node at its localized pose.
+    if (r->inserted) {
+      ++stats.revisit_scans;
+      matchToMap(*r, scan, update);
+      collectFinishedSubmaps();
+    }
+    revisited_since_node = true;
+    current_pose = compose(map_to_local, r->local_pose);
+    const SlamNode& anchor = nodes[static_cast<std::size_t>(*revisit_anchor)];
+    records.push_back({scan.stamp, anchor.id, between(anchor.global_pose, current_pose)});
+    update.pose = current_pose;
+    update.covariance = cov_since_loop;
+    update.localized = linked;
+    return update;
+  }
   if (r->inserted || !last_node) takeNode(*r, scan, update);
   const SlamNode& n = nodes[static_cast<std::size_t>(*last_node)];
   const Pose2 rel = between(n.local_pose, r->local_pose);
@@ -137,15 +158,18 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
 }
 
 void GraphSlam::Impl::takeNode(const LocalResult& r, const sim::LaserScan& scan, ScanUpdate& update) {
+  const bool after_revisit = revisited_since_node;
   const std::int64_t id = addNode(r, scan);
   update.node_added = true;
   update.node = id;
   int added = 0;
-  if (options.loop_closure && (static_cast<int>(nodes.size()) % std::max(1, options.loop_node_stride) == 0 || !linked)) {
+  // The first node after a revisit always searches: its edge to the node before the revisit is long and weak.
+  if (options.loop_closure &&
+      (static_cast<int>(nodes.size()) % std::max(1, options.loop_node_stride) == 0 || !linked || after_revisit)) {
     added = searchLoops(id);
     update.loops_added += added;
   }
-  for (const auto& s : local->takeNewlyFinished()) submaps[static_cast<std::size_t>(submap_base + s->index)].finished = true;
+  collectFinishedSubmaps();
   if (added > 0 ||
       (options.optimize_every_n_nodes > 0 && nodes_since_optimize >= options.optimize_every_n_nodes)) {
     optimize();
@@ -181,7 +205,8 @@ std::int64_t GraphSlam::Impl::addNode(const LocalResult& r, const sim::LaserScan
     n.descriptor = {};  // malformed scan geometry: no verifier candidate (never reached for scans LocalSlam took)
   }
   const bool first_of_trajectory = !last_node.has_value();
-  if (first_of_trajectory) {
+  if (first_of_trajectory || revisited_since_node) {
+    // After a revisit map_to_local is the localized one: the relative motion since the last node is not.
     n.global_pose = compose(map_to_local, n.local_pose);
   } else {
     const SlamNode& p = nodes[static_cast<std::size_t>(*last_node)];
@@ -223,6 +248,8 @@ std::int64_t GraphSlam::Impl::addNode(const LocalResult& r, const sim::LaserScan
     cov_since_loop = ja * cov_since_loop * ja.transpose() + jb * S * jb.transpose();
   }
   last_node = node.id;
+  revisited_since_node = false;
+  localized_at.reset();
   syncSubmaps(r, node.id);
   ++nodes_since_optimize;
   ++stats.nodes;
@@ -536,10 +563,48 @@ int GraphSlam::Impl::searchLoops(std::int64_t id) {
   return added;
 }
 
+std::optional<std::int64_t> GraphSlam::Impl::mappedNodeNear(const Pose2& pose, double stamp) const {
+  std::optional<std::int64_t> best;
+  double best_d2 = options.revisit_radius * options.revisit_radius;
+  for (const SlamNode& k : nodes) {
+    if (k.trajectory == trajectory && stamp - k.stamp < options.loop_min_time_gap) continue;
+    const double d2 = (k.global_pose.t - pose.t).squaredNorm();
+    if (d2 > best_d2) continue;
+    if (std::abs(std::remainder(k.global_pose.theta - pose.theta, 2.0 * std::numbers::pi)) > options.revisit_angle) continue;
+    best = k.id;
+    best_d2 = d2;
+  }
+  return best;
+}
+
+void GraphSlam::Impl::collectFinishedSubmaps() {
+  for (const auto& s : local->takeNewlyFinished()) {
+    const auto idx = static_cast<std::size_t>(submap_base + s->index);
+    if (idx < submaps.size() && submaps[idx].submap) submaps[idx].finished = true;
+  }
+  local->releaseFinished();
+}
+
 void GraphSlam::Impl::localizeScan(const LocalResult& r, const sim::LaserScan& scan, ScanUpdate& update) {
-  // Localization only: the loaded map is not changed; the current scan is matched against it every
-  // loop_node_stride-th inserted scan and map_to_local follows the matches.
+  // Localization only: the loaded map is not changed; the current scan is matched against it and
+  // map_to_local follows the matches.
+  matchToMap(r, scan, update);
+  collectFinishedSubmaps();
+  current_pose = compose(map_to_local, r.local_pose);
+  localization_poses.push_back({r.stamp, current_pose});
+  update.pose = current_pose;
+  update.covariance = cov_since_loop;
+  update.localized = linked;
+}
+
+void GraphSlam::Impl::matchToMap(const LocalResult& r, const sim::LaserScan& scan, ScanUpdate& update) {
   if (r.inserted && options.loop_closure) {
+    // Prediction: the pose moves with local SLAM; its uncertainty grows by the floor of the graph's
+    // consecutive-node edges (odom_sigma_xy / odom_sigma_theta plus 1 % of the distance, addNode()).
+    const double moved = localized_at ? (r.local_pose.t - localized_at->t).norm() : 0.0;
+    localized_at = r.local_pose;
+    const double sxy = options.odom_sigma_xy + 0.01 * moved, sth = options.odom_sigma_theta + 0.01 * moved;
+    cov_since_loop.diagonal() += Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth);
     ++stats.loop_searches;
     const auto t0 = Clock::now();
     ScanDescriptor desc;
@@ -555,6 +620,7 @@ void GraphSlam::Impl::localizeScan(const LocalResult& r, const sim::LaserScan& s
     q.points = &r.matching_points;
     q.descriptor = &desc;
     std::vector<LoopMatch> found;
+    bool placed_globally = false;
     if (linked) {
       found = localSearch(q, searchRadius(), options.verifier_local_threshold);
     } else {
@@ -563,28 +629,43 @@ void GraphSlam::Impl::localizeScan(const LocalResult& r, const sim::LaserScan& s
       if (!fresh.empty() && verifyGlobal(fresh, agreeing)) {
         found.push_back(agreeing.front());
         linked = true;
+        placed_globally = true;
         pending_global.clear();
       }
     }
-    if (!found.empty()) {
-      const auto best = std::max_element(found.begin(), found.end(),
-                                         [](const LoopMatch& a, const LoopMatch& b) { return a.score < b.score; });
-      map_to_local = best->implied_map_to_local;
-      cov_since_loop.setZero();
-      ++stats.loops_accepted;
+    std::sort(found.begin(), found.end(), [](const LoopMatch& a, const LoopMatch& b) { return a.score > b.score; });
+    Pose2 x = q.global_guess;
+    for (const LoopMatch& m : found) {
+      // The match's covariance, from the query's frame (where LoopMatch::information lives) into the map frame.
+      Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+      R.topLeftCorner<2, 2>() = rot(m.implied_query_global.theta);
+      const Eigen::Matrix3d sigma_z = R * m.information.inverse() * R.transpose();
+      if (!placed_globally) {
+        // Kalman update of (x, y, θ) with the match (a corridor's match is weak along its axis, so the
+        // prediction holds there); a match that disagrees beyond χ²₃ 99.9 % (16.27) is not taken.
+        const Eigen::Matrix3d S = cov_since_loop + sigma_z;
+        Eigen::Vector3d y(m.implied_query_global.t.x() - x.t.x(), m.implied_query_global.t.y() - x.t.y(),
+                          std::remainder(m.implied_query_global.theta - x.theta, 2.0 * std::numbers::pi));
+        const Eigen::Matrix3d S_inv = S.inverse();
+        if (!(y.dot(S_inv * y) <= 16.27)) {
+          ++stats.localization_gated;
+          continue;
+        }
+        const Eigen::Matrix3d K = cov_since_loop * S_inv;
+        const Eigen::Vector3d dx = K * y;
+        x = Pose2{x.t + dx.head<2>(), x.theta + dx.z()};
+        cov_since_loop = (Eigen::Matrix3d::Identity() - K) * cov_since_loop;
+        cov_since_loop = 0.5 * (cov_since_loop + cov_since_loop.transpose()).eval();
+      } else {
+        x = m.implied_query_global;  // placed by a verified global search: the prediction meant nothing
+        cov_since_loop = sigma_z;
+      }
+      ++stats.localization_matches;  // not loops_accepted: no edge, so not in the loop precision
       update.loops_added = 1;
-    } else if (r.inserted) {
-      // Uncertainty grows while no match confirms the pose: the motion filter's step with 5 % noise (chosen).
-      const double d = 0.05 * options.local.motion_min_distance;
-      cov_since_loop.diagonal() += Eigen::Vector3d(d * d, d * d, 1e-4);
     }
+    map_to_local = compose(x, inverse(r.local_pose));
     stats.loop_time_s += seconds(t0);
   }
-  current_pose = compose(map_to_local, r.local_pose);
-  localization_poses.push_back({r.stamp, current_pose});
-  update.pose = current_pose;
-  update.covariance = cov_since_loop;
-  update.localized = linked;
 }
 
 OptimizerSummary GraphSlam::Impl::optimize() {

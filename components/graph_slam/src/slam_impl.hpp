@@ -94,6 +94,11 @@ struct GraphSlam::Impl {
   std::optional<Pose2> initial_pose;  ///< applied at the next scan (setInitialPose)
   std::vector<sim::LaserScan> held_scans;  ///< raw scans of LocalSlam's held-back (unmatched) results, in order
   std::optional<Pose2> restart_anchor;  ///< after restartLost(): map pose the next scan continues from
+  /// On mapped ground (revisit_radius): the nearest older node, to which the scans are recorded (a record
+  /// hangs off its node: the nearest keeps a later optimization's rotation of a far node from swinging it).
+  std::optional<std::int64_t> revisit_anchor;
+  bool revisited_since_node = false;  ///< the next node follows a revisit: placed by the localized pose
+  std::optional<Pose2> localized_at;  ///< local pose of the last scan matchToMap() predicted to (process noise)
   void applyInitialPose(const Pose2& local_pose);
 
   // pipeline (slam.cpp)
@@ -115,6 +120,15 @@ struct GraphSlam::Impl {
   bool verifyGlobal(const std::vector<LoopMatch>& fresh, std::vector<LoopMatch>& agreeing);
   void addLoopEdge(std::int64_t node, const LoopMatch& m);
   void localizeScan(const LocalResult& r, const sim::LaserScan& scan, ScanUpdate& update);
+  /// Matches an inserted scan against the map and moves map_to_local to the best match (localization-only
+  /// mode, and revisits in mapping mode).
+  void matchToMap(const LocalResult& r, const sim::LaserScan& scan, ScanUpdate& update);
+  /// revisit_radius: the nearest older node (loop_min_time_gap, or another trajectory) near `pose` (map
+  /// frame), if any.
+  std::optional<std::int64_t> mappedNodeNear(const Pose2& pose, double stamp) const;
+  /// Takes LocalSlam's newly finished submaps: those with nodes become loop-closure targets, the others (no
+  /// node went into them: revisits, localization) are dropped, so LocalSlam holds only its active ones.
+  void collectFinishedSubmaps();
   SubmapCache& cache(int submap);
   OptimizerSummary optimize();
   void startTrajectory();

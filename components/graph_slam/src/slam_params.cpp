@@ -115,6 +115,10 @@ std::vector<SlamParam> makeTable() {
   t.push_back(param("optimize_every_n_nodes", "re-optimize after this many nodes (0: loops only)", &SlamOptions::optimize_every_n_nodes, 0, 1e9));
   t.push_back(param("map_resolution", "occupancy grid resolution (m)", &SlamOptions::map_resolution, 0.005, 10));
   t.push_back(param("localization_only", "localize on a loaded map without extending it", &SlamOptions::localization_only));
+  t.push_back(param("revisit_radius", "mapping: no new node within this distance of an older node, localize instead (m; 0: off)",
+                    &SlamOptions::revisit_radius, 0, 100));
+  t.push_back(param("revisit_angle", "heading difference within which an older node counts as revisited (rad)",
+                    &SlamOptions::revisit_angle, 0, 3.15));
   return t;
 }
 

@@ -132,6 +132,12 @@ TEST(LocalSlam, MotionFilterAndSubmapLifecycle) {
   EXPECT_EQ(last_finished, 3U);
   EXPECT_TRUE(moving.takeNewlyFinished().empty());
   EXPECT_EQ(moving.finishedSubmaps()[1]->index, 1);
+  // Released: LocalSlam keeps only its active submaps; the next finished one is reported as new.
+  const std::shared_ptr<const gs::Submap> kept = moving.finishedSubmaps()[0];
+  moving.releaseFinished();
+  EXPECT_TRUE(moving.finishedSubmaps().empty());
+  EXPECT_TRUE(moving.takeNewlyFinished().empty());
+  EXPECT_EQ(kept->index, 0);  // a taken submap stays valid for whoever holds it
 }
 
 TEST(LocalSlam, DriftsMuchLessThanOdometryOnASimulatedRun) {

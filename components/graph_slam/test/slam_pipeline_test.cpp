@@ -191,6 +191,79 @@ TEST(GraphSlam, ClosesASimulatedLoopAndEndsCloserToTheTruthThanWithout) {
   EXPECT_GT(map.knownCells(), 5000u);
 }
 
+// Long-term operation (revisit_radius): the return trip runs over mapped ground, so it localizes against the
+// map instead of adding nodes; the graph stays at about the outbound trip's size and the run stays as accurate.
+TEST(GraphSlam, RevisitsLocalizeInsteadOfGrowingTheGraph) {
+  const SimRun& run = outAndBack();
+  // The far end of the corridor: the return trip starts at the first scan taken there.
+  const std::size_t turn = firstScanWhere(run, 0, [](const cairn::sim::Pose2& p) { return p.x > 23.5; });
+  ASSERT_LT(turn, run.scans.size());
+  gs::GraphSlam growing(simOptions());
+  feed(growing, run, 0, turn);
+  const std::size_t growing_out = growing.nodes().size();
+  feed(growing, run, turn, run.scans.size());
+  growing.finish();
+  gs::SlamOptions o = simOptions();
+  o.revisit_radius = 1.0;
+  gs::GraphSlam bounded(o);
+  feed(bounded, run, 0, turn);
+  const std::size_t bounded_out = bounded.nodes().size();
+  feed(bounded, run, turn, run.scans.size());
+  bounded.finish();
+  const double err_growing = finalError(growing.trajectory(), run);
+  const double err_bounded = finalError(bounded.trajectory(), run);
+  std::printf("nodes out / whole run: %zu / %zu; with revisit_radius 1 m %zu / %zu (%zu revisit scans); final error "
+              "%.3f / %.3f m\n", growing_out, growing.nodes().size(), bounded_out, bounded.nodes().size(),
+              bounded.stats().revisit_scans, err_growing, err_bounded);
+  EXPECT_EQ(bounded_out, growing_out);  // nothing was mapped before on the way out
+  EXPECT_GT(bounded.stats().revisit_scans, 50u);
+  // Turning on the spot at the far end adds nodes (the outbound nodes there are younger than
+  // loop_min_time_gap); once the robot is 2 m back along the corridor, none.
+  const std::size_t back = firstScanWhere(run, turn, [](const cairn::sim::Pose2& p) { return p.x < 22.0; });
+  ASSERT_LT(back, run.scans.size());
+  auto nodesFrom = [&](const gs::GraphSlam& slam) {
+    return std::count_if(slam.nodes().begin(), slam.nodes().end(),
+                         [&](const gs::SlamNode& n) { return n.stamp >= run.scans[back].stamp; });
+  };
+  EXPECT_EQ(nodesFrom(bounded), 0);
+  EXPECT_GT(nodesFrom(growing), 50);
+  EXPECT_LT(err_bounded, 0.3);
+  EXPECT_EQ(bounded.stats().lost_events, 0u);
+  const auto traj = bounded.trajectory();
+  EXPECT_EQ(traj.size(), run.scans.size());
+  for (std::size_t i = 1; i < traj.size(); ++i) EXPECT_LE(traj[i - 1].stamp, traj[i].stamp);
+  EXPECT_GT(bounded.map().knownCells(), 5000u);
+}
+
+// Leaving mapped ground: back from office_s2 the robot revisits the corridor to x = 8.2 m, then drives on into
+// the unmapped east part, where nodes are added again (the first one placed by the localized pose), and returns
+// over everything. It must end as close to the truth as with every scan a node.
+TEST(GraphSlam, RevisitThenNewGroundMapsOnAndStaysAccurate) {
+  static const SimRun run = simulateOfficeDetour();
+  gs::GraphSlam growing(simOptions());
+  feed(growing, run, 0, run.scans.size());
+  growing.finish();
+  gs::SlamOptions o = simOptions();
+  o.revisit_radius = 1.0;
+  gs::GraphSlam bounded(o);
+  feed(bounded, run, 0, run.scans.size());
+  bounded.finish();
+  const double err_growing = finalError(growing.trajectory(), run);
+  const double err_bounded = finalError(bounded.trajectory(), run);
+  // East of x = 12 m the corridor is first seen on the way to the junction: mapped there.
+  const auto east = std::count_if(bounded.nodes().begin(), bounded.nodes().end(),
+                                  [](const gs::SlamNode& n) { return n.global_pose.t.x() > 12.0; });
+  std::printf("nodes %zu vs %zu (%zu revisit scans), %ld east of 12 m; final error %.3f / %.3f m\n",
+              bounded.nodes().size(), growing.nodes().size(), bounded.stats().revisit_scans, static_cast<long>(east),
+              err_growing, err_bounded);
+  EXPECT_GT(bounded.stats().revisit_scans, 50u);
+  EXPECT_LT(bounded.nodes().size(), growing.nodes().size());
+  EXPECT_GT(east, 20);
+  EXPECT_EQ(bounded.stats().lost_events, 0u);
+  EXPECT_EQ(bounded.inconsistentLoops(), 0u);
+  EXPECT_LT(err_bounded, 0.3) << "every scan a node: " << err_growing;
+}
+
 TEST(GraphSlam, SaveLoadRoundTripAndBrokenFilesGiveClearErrors) {
   const SimRun& run = outAndBack();
   gs::GraphSlam slam(simOptions());
@@ -304,6 +377,7 @@ TEST(GraphSlam, LocalizesOnALoadedMapWithoutGrowingIt) {
   const gs::Pose2 align = gs::compose(t0, gs::inverse(map_traj.front().pose));
   const gs::Pose2 est = gs::compose(align, loc.currentPose());
   const gs::Pose2 truth = toGs(nearest(run.truth, run.scans.back().stamp).pose);
+  std::printf("localization: final error %.3f m\n", (est.t - truth.t).norm());
   EXPECT_LT((est.t - truth.t).norm(), 0.3);
 }
 
@@ -393,6 +467,8 @@ TEST(GraphSlam, LocalizationRecoversFromAKidnapping) {
   feed(loc, run, turn, a_end);
   ASSERT_TRUE(loc.localized());
   // (the first placement, on the corridor, is weakest along its axis)
+  std::printf("localization on the corridor: %.3f m from the map's pose of the same scan\n",
+              (loc.currentPose().t - mapPose(a_end - 1).t).norm());
   EXPECT_LT((loc.currentPose().t - mapPose(a_end - 1).t).norm(), 0.5);
   feedKidnapped(loc, run, a_end - 1, b_begin, b_end);
   EXPECT_EQ(loc.stats().lost_events, 1u);

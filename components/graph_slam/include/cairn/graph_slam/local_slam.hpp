@@ -101,6 +101,9 @@ class LocalSlam {
   std::vector<std::shared_ptr<const Submap>> finishedSubmaps() const;  ///< all finished, in order
   /// Submaps finished since the last call (pollable; in order).
   std::vector<std::shared_ptr<const Submap>> takeNewlyFinished();
+  /// Forgets the finished submaps (whoever took them keeps them alive): finishedSubmaps() is empty afterwards,
+  /// so that a long run does not keep every submap it ever finished.
+  void releaseFinished();
 
   const std::string& lastError() const { return last_error_; }
   const LocalSlamOptions& options() const { return options_; }

@@ -120,6 +120,16 @@ struct SlamOptions {
 
   /// Localization only: match against the loaded map, never add nodes to it.
   bool localization_only = false;
+
+  // ---- long-term operation (not in the thesis; chosen, see README "Long-term operation")
+  /// Mapping mode: where the graph already has a node within revisit_radius (m) and revisit_angle (rad) of the
+  /// robot that is older than loop_min_time_gap (or of another trajectory), inserted scans become no nodes: the
+  /// robot localizes against the map there, as in localization-only mode, and the graph grows only where the
+  /// map is new. A robot patrolling mapped ground then keeps a bounded graph (memory, loop search, optimization
+  /// and map rebuild stop growing with time). 0: off, every inserted scan becomes a node.
+  double revisit_radius = 0.0;
+  /// Heading difference within which a node counts as the same view (π: any, for 360° lasers).
+  double revisit_angle = 3.14159265358979323846;
 };
 
 enum class EdgeKind : std::uint8_t { kSequential = 0, kLoop = 1, kPrior = 2 };
@@ -174,6 +184,9 @@ struct SlamStats {
   std::size_t local_recoveries = 0;    ///< scans the branch-and-bound recovery search re-placed
   std::size_t scans_unmatched = 0;     ///< scans below the unmatched score (dead reckoning, not inserted)
   std::size_t lost_events = 0;         ///< lost detections (each started a global search)
+  std::size_t revisit_scans = 0;       ///< inserted scans on mapped ground that became no node (revisit_radius)
+  std::size_t localization_matches = 0;  ///< matches of a scan (no node) to the map taken (localization, revisits)
+  std::size_t localization_gated = 0;    ///< such matches not taken: beyond χ²₃ 99.9 % of the predicted pose
 };
 
 struct ScanUpdate {
