@@ -61,6 +61,8 @@ void GraphSlam::Impl::startTrajectory() {
   submap_base = static_cast<int>(submaps.size());
   last_node.reset();
   localized_at.reset();
+  revisit_anchor.reset();
+  revisited_since_node = false;
   cov_since_loop.setZero();
   pending_global.clear();
   links = 0;
@@ -126,8 +128,10 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
     localizeScan(*r, scan, update);
     return update;
   }
-  if (r->inserted && last_node && options.revisit_radius > 0.0)
-    revisit_anchor = linked ? mappedNodeNear(compose(map_to_local, r->local_pose), r->stamp) : std::nullopt;
+  if (r->inserted)
+    revisit_anchor = options.revisit_radius > 0.0 && last_node && linked
+                         ? mappedNodeNear(compose(map_to_local, r->local_pose), r->stamp)
+                         : std::nullopt;
   if (revisit_anchor) {
     // Mapped ground (revisit_radius): no node; the scan is matched against the map instead, as in
     // localization-only mode, and recorded relative to the nearest mapped node at its localized pose.

@@ -408,7 +408,9 @@ TEST(GraphSlam, KidnappedRobotIsDetectedAndPlacedByAGlobalSearch) {
   };
   gs::SlamOptions huber = simOptions();
   huber.loop_kernel = "huber:1";
-  for (const gs::SlamOptions& o : {simOptions(), huber}) {
+  gs::SlamOptions revisit = simOptions();  // lost while revisiting mapped ground: the new trajectory maps anew
+  revisit.revisit_radius = 1.0;
+  for (const gs::SlamOptions& o : {simOptions(), huber, revisit}) {
     const gs::GraphSlam slam = kidnap(o);
     EXPECT_EQ(slam.stats().lost_events, 1u);
     EXPECT_GE(slam.stats().scans_unmatched, 5u);
@@ -422,7 +424,8 @@ TEST(GraphSlam, KidnappedRobotIsDetectedAndPlacedByAGlobalSearch) {
     EXPECT_EQ(slam.inconsistentLoops(1.0, 10.0 * M_PI / 180.0), 0u);
     const double at_door = errorAt(slam, b_door);
     const double final_err = errorInMapFrame(slam, run, slam.currentPose(), run.scans.back().stamp);
-    std::printf("kidnapped (%s): error %.3f m at the office door, %.3f m at the end\n", o.loop_kernel.c_str(), at_door, final_err);
+    std::printf("kidnapped (%s, revisit_radius %.0f): error %.3f m at the office door, %.3f m at the end\n",
+                o.loop_kernel.c_str(), o.revisit_radius, at_door, final_err);
     // Placed in the right office: the neighbouring offices are 6 m away; what remains is SLAM's own error.
     EXPECT_LT(at_door, 0.5) << o.loop_kernel;
     // With DCS the end of the return trip is 1.15 m off: DCS (Φ = 1) down-weights the correct loops of the
