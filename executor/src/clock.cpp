@@ -18,17 +18,28 @@ void Clock::enable_sim_time(bool on) { sim_.store(on); }
 
 void Clock::set_sim_time(Time t) {
   sim_ns_.store(t.ns, std::memory_order_release);
-  std::vector<std::function<void()>> cbs;
+  std::vector<std::pair<std::uint64_t, std::function<void()>>> cbs;
   {
     std::lock_guard l(cb_mu_);
     cbs = callbacks_;
   }
-  for (auto& cb : cbs) cb();
+  for (auto& [id, cb] : cbs) cb();
 }
 
-void Clock::on_update(std::function<void()> cb) {
+std::uint64_t Clock::on_update(std::function<void()> cb) {
   std::lock_guard l(cb_mu_);
-  callbacks_.push_back(std::move(cb));
+  callbacks_.emplace_back(next_cb_id_, std::move(cb));
+  return next_cb_id_++;
+}
+
+void Clock::remove_update(std::uint64_t id) {
+  std::lock_guard l(cb_mu_);
+  std::erase_if(callbacks_, [id](const auto& c) { return c.first == id; });
+}
+
+std::size_t Clock::update_callbacks() const {
+  std::lock_guard l(cb_mu_);
+  return callbacks_.size();
 }
 
 }  // namespace cairn

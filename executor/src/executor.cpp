@@ -57,7 +57,15 @@ void TimerBase::execute() {
 // ---------------- Executor ----------------
 Executor::Executor() : Executor(Options{}) {}
 
-Executor::Executor(Options opts) : opts_(opts) {
+// Lets a clock's update callback reach the executor only while it exists: ~Executor clears `executor` under
+// `mu`, so an update running on another thread either finishes first or sees nullptr.
+struct Executor::ClockHook {
+  std::mutex mu;
+  Executor* executor = nullptr;
+};
+
+Executor::Executor(Options opts) : opts_(opts), clock_hook_(std::make_shared<ClockHook>()) {
+  clock_hook_->executor = this;
   if (opts_.threads == 0) opts_.threads = std::max(1u, std::thread::hardware_concurrency());
   ring_.resize(64);
   std::lock_guard l(all_mu());
@@ -69,6 +77,11 @@ Executor::~Executor() {
     std::lock_guard l(all_mu());
     all_executors().erase(this);
   }
+  {
+    std::lock_guard l(clock_hook_->mu);
+    clock_hook_->executor = nullptr;
+  }
+  for (auto& [clock, id] : hooked_clocks_) clock->remove_update(id);
   cancel();
 }
 
@@ -103,13 +116,17 @@ void Executor::add_timer(const std::shared_ptr<TimerBase>& t) {
   {
     std::lock_guard l(mu_);
     timers_.push_back(t);
-  }
-  if (t->clock()->type() == ClockType::Ros) {
-    // sim time moves in jumps: re-check timers whenever it does
-    std::weak_ptr<TimerBase> wt = t;
-    t->clock()->on_update([this, wt] {
-      if (!wt.expired()) notify();
-    });
+    const std::shared_ptr<Clock>& c = t->clock();
+    const bool hooked = std::any_of(hooked_clocks_.begin(), hooked_clocks_.end(),
+                                    [&](const auto& h) { return h.first == c; });
+    if (c->type() == ClockType::Ros && !hooked) {
+      // sim time moves in jumps: re-check timers whenever it does
+      const std::uint64_t id = c->on_update([h = clock_hook_] {
+        std::lock_guard l(h->mu);
+        if (h->executor != nullptr) h->executor->notify();
+      });
+      hooked_clocks_.emplace_back(c, id);
+    }
   }
   notify();
 }

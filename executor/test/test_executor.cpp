@@ -59,6 +59,38 @@ TEST(Executor, SimTimeTimersFollowTheSimulatedClock) {
   EXPECT_EQ(ticks, 5) << "500 ms of sim time = 5 periods of 100 ms";
 }
 
+// A behavior tree starts a one-shot timer per Wait; each used to register a clock update callback that was
+// never removed (the demo's executive grew by ~1 MB/h, and every sim-time update called them all).
+TEST(Executor, TimersOnASimClockShareOneClockCallbackThatGoesWithTheExecutor) {
+  auto clock = std::make_shared<cairn::Clock>(cairn::ClockType::Ros);
+  clock->enable_sim_time(true);
+  {
+    Executor exec;
+    auto group = std::make_shared<CallbackGroup>();
+    for (int i = 0; i < 1000; ++i) {
+      auto t = std::make_shared<cairn::TimerBase>(group, clock, 10ms, [] {});
+      t->set_one_shot(true);
+      exec.add_timer(t);
+      exec.remove_timer(t.get());
+    }
+    EXPECT_EQ(clock->update_callbacks(), 1u);
+    int ticks = 0;
+    auto t = std::make_shared<cairn::TimerBase>(group, clock, 100ms, [&] { ++ticks; });
+    exec.add_timer(t);
+    std::thread feeder([&] {
+      for (int i = 1; i <= 3; ++i) {
+        std::this_thread::sleep_for(2ms);
+        clock->set_sim_time(cairn::Time{i * 100'000'000LL});
+      }
+    });
+    exec.spin_until([&] { return ticks >= 3; }, 5s);
+    feeder.join();
+    EXPECT_EQ(ticks, 3);  // the shared callback still wakes the executor when sim time moves
+  }
+  EXPECT_EQ(clock->update_callbacks(), 0u);
+  clock->set_sim_time(cairn::Time{1'000'000'000LL});  // no executor left to call
+}
+
 TEST(Executor, MutuallyExclusiveGroupNeverRunsTwoCallbacksAtOnce) {
   Executor exec(Executor::Options{4});
   auto group = std::make_shared<CallbackGroup>(CallbackGroup::Type::MutuallyExclusive);

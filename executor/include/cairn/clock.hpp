@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <mutex>
+#include <utility>
 #include <vector>
 
 namespace cairn {
@@ -31,15 +32,20 @@ class Clock {
   void enable_sim_time(bool on);
   bool sim_time_active() const { return sim_.load(); }
   void set_sim_time(Time t);
-  /// Called after every sim-time update (executors re-check their timers).
-  void on_update(std::function<void()> cb);
+  /// Called after every sim-time update (executors re-check their timers). Returns an id for
+  /// remove_update(); a callback may run on the thread of set_sim_time until remove_update() returns.
+  std::uint64_t on_update(std::function<void()> cb);
+  void remove_update(std::uint64_t id);
+  /// Number of registered update callbacks.
+  std::size_t update_callbacks() const;
 
  private:
   ClockType type_;
   std::atomic<bool> sim_{false};
   std::atomic<int64_t> sim_ns_{0};
-  std::mutex cb_mu_;
-  std::vector<std::function<void()>> callbacks_;
+  mutable std::mutex cb_mu_;
+  std::vector<std::pair<std::uint64_t, std::function<void()>>> callbacks_;
+  std::uint64_t next_cb_id_ = 1;
 };
 
 }  // namespace cairn

@@ -15,6 +15,7 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "cairn/clock.hpp"
@@ -166,6 +167,11 @@ class Executor {
   std::size_t head_ = 0, size_ = 0;
   std::vector<std::shared_ptr<Executable>> blocked_;  // ready but their group is busy
   std::vector<std::shared_ptr<TimerBase>> timers_;
+  /// Wakes this executor when a simulated clock of its timers moves: one update callback per clock (not per
+  /// timer: a behavior tree's one-shot timers used to add one each, never removed), unregistered in ~Executor.
+  struct ClockHook;
+  std::shared_ptr<ClockHook> clock_hook_;
+  std::vector<std::pair<std::shared_ptr<Clock>, std::uint64_t>> hooked_clocks_;  // guarded by mu_
   std::atomic<bool> canceled_{false};
   std::atomic<std::uint64_t> executed_{0};
   std::size_t sleeping_ = 0;
