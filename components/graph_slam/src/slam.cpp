@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cmath>
-#include <numbers>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
@@ -144,9 +143,7 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
     current_pose = compose(map_to_local, r->local_pose);
     const SlamNode& anchor = nodes[static_cast<std::size_t>(*revisit_anchor)];
     records.push_back({scan.stamp, anchor.id, between(anchor.global_pose, current_pose)});
-    update.pose = current_pose;
-    update.covariance = cov_since_loop;
-    update.localized = linked;
+    reportPose(update);
     return update;
   }
   if (r->inserted || !last_node) takeNode(*r, scan, update);
@@ -155,9 +152,7 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
   records.push_back({scan.stamp, n.id, rel});
   current_pose = compose(n.global_pose, rel);
   map_to_local = compose(n.global_pose, inverse(n.local_pose));
-  update.pose = current_pose;
-  update.covariance = cov_since_loop;
-  update.localized = linked;
+  reportPose(update);
   return update;
 }
 
@@ -179,6 +174,12 @@ void GraphSlam::Impl::takeNode(const LocalResult& r, const sim::LaserScan& scan,
     optimize();
     update.optimized = true;
   }
+}
+
+void GraphSlam::Impl::reportPose(ScanUpdate& update) const {
+  update.pose = current_pose;
+  update.covariance = cov_since_loop;
+  update.localized = linked;
 }
 
 void GraphSlam::Impl::applyInitialPose(const Pose2& local_pose) {
@@ -574,7 +575,7 @@ std::optional<std::int64_t> GraphSlam::Impl::mappedNodeNear(const Pose2& pose, d
     if (k.trajectory == trajectory && stamp - k.stamp < options.loop_min_time_gap) continue;
     const double d2 = (k.global_pose.t - pose.t).squaredNorm();
     if (d2 > best_d2) continue;
-    if (std::abs(std::remainder(k.global_pose.theta - pose.theta, 2.0 * std::numbers::pi)) > options.revisit_angle) continue;
+    if (std::abs(normalizeAngle(k.global_pose.theta - pose.theta)) > options.revisit_angle) continue;
     best = k.id;
     best_d2 = d2;
   }
@@ -596,9 +597,7 @@ void GraphSlam::Impl::localizeScan(const LocalResult& r, const sim::LaserScan& s
   collectFinishedSubmaps();
   current_pose = compose(map_to_local, r.local_pose);
   localization_poses.push_back({r.stamp, current_pose});
-  update.pose = current_pose;
-  update.covariance = cov_since_loop;
-  update.localized = linked;
+  reportPose(update);
 }
 
 void GraphSlam::Impl::matchToMap(const LocalResult& r, const sim::LaserScan& scan, ScanUpdate& update) {
@@ -649,15 +648,14 @@ void GraphSlam::Impl::matchToMap(const LocalResult& r, const sim::LaserScan& sca
         // prediction holds there); a match that disagrees beyond χ²₃ 99.9 % (16.27) is not taken.
         const Eigen::Matrix3d S = cov_since_loop + sigma_z;
         Eigen::Vector3d y(m.implied_query_global.t.x() - x.t.x(), m.implied_query_global.t.y() - x.t.y(),
-                          std::remainder(m.implied_query_global.theta - x.theta, 2.0 * std::numbers::pi));
+                          normalizeAngle(m.implied_query_global.theta - x.theta));
         const Eigen::Matrix3d S_inv = S.inverse();
         if (!(y.dot(S_inv * y) <= 16.27)) {
           ++stats.localization_gated;
           continue;
         }
         const Eigen::Matrix3d K = cov_since_loop * S_inv;
-        const Eigen::Vector3d dx = K * y;
-        x = Pose2{x.t + dx.head<2>(), x.theta + dx.z()};
+        x = retract(x, K * y);
         cov_since_loop = (Eigen::Matrix3d::Identity() - K) * cov_since_loop;
         cov_since_loop = 0.5 * (cov_since_loop + cov_since_loop.transpose()).eval();
       } else {

@@ -100,6 +100,8 @@ struct GraphSlam::Impl {
   bool revisited_since_node = false;  ///< the next node follows a revisit: placed by the localized pose
   std::optional<Pose2> localized_at;  ///< local pose of the last scan matchToMap() predicted to (process noise)
   void applyInitialPose(const Pose2& local_pose);
+  /// The scan's answer: current_pose with the covariance since the last loop, and whether the trajectory is linked.
+  void reportPose(ScanUpdate& update) const;
 
   // pipeline (slam.cpp)
   std::optional<ScanUpdate> addScan(const sim::LaserScan& scan, const std::optional<Pose2>& odom);
