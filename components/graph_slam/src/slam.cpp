@@ -47,6 +47,11 @@ GraphSlam::Impl::Impl(SlamOptions o) : options(std::move(o)), optimizer(options.
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("loop_kernel: ") + e.what());
   }
+  try {
+    readmit_kernel = RobustKernel::parse(options.loop_readmit_kernel);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("loop_readmit_kernel: ") + e.what());
+  }
   if (options.use_verifier && options.loop_closure) {
     verifier = options.verifier_model.empty() ? LoopVerifier::loadDefault() : LoopVerifier::load(options.verifier_model);
     verifier->setThreshold(verifier->threshold() + options.verifier_threshold_offset);
@@ -502,6 +507,7 @@ void GraphSlam::Impl::addLoopEdge(std::int64_t node, const LoopMatch& m) {
   SlamEdge e{m.target, node, EdgeKind::kLoop, m.z, m.information, m.score};
   const std::size_t f = graph.addBetween2(e.from, e.to, e.z, e.information);
   graph.setRobustKernel(f, loop_kernel);
+  loop_factors.push_back({edges.size(), f, false});
   edges.push_back(e);
   for (auto it = attempts.rbegin(); it != attempts.rend(); ++it)
     if (it->query == node && it->target == m.target) {
@@ -670,12 +676,67 @@ void GraphSlam::Impl::matchToMap(const LocalResult& r, const sim::LaserScan& sca
   }
 }
 
+bool GraphSlam::Impl::readmitAgreeingLoops() {
+  if (options.loop_readmit_min_set <= 0 || !last_node) return false;
+  // Suppressed recent loops: residual χ² of the constraint at the current solution above the threshold.
+  auto pose = [&](std::int64_t id) -> const Pose2& { return nodes[static_cast<std::size_t>(id)].global_pose; };
+  std::vector<std::size_t> cand;  // indices into loop_factors
+  for (std::size_t i = 0; i < loop_factors.size(); ++i) {
+    const LoopFactor& lf = loop_factors[i];
+    const SlamEdge& e = edges[lf.edge];
+    if (lf.readmitted || *last_node - e.to > options.loop_readmit_window) continue;
+    const Pose2 err = compose(inverse(e.z), between(pose(e.from), pose(e.to)));
+    const Eigen::Vector3d r(err.t.x(), err.t.y(), normalizeAngle(err.theta));
+    if (r.dot(e.information * r) > options.loop_readmit_chi2) cand.push_back(i);
+  }
+  if (static_cast<int>(cand.size()) < options.loop_readmit_min_set) return false;
+  // Pairwise agreement: pose of query j in target i's frame through loop j and the estimated path between the
+  // targets, and through loop i and the estimated path between the queries.
+  auto agree = [&](std::size_t i, std::size_t j) {
+    const SlamEdge& a = edges[loop_factors[i].edge];
+    const SlamEdge& b = edges[loop_factors[j].edge];
+    const Pose2 via_j = compose(between(pose(a.from), pose(b.from)), b.z);
+    const Pose2 via_i = compose(a.z, between(pose(a.to), pose(b.to)));
+    const Pose2 d = between(via_i, via_j);
+    return d.t.norm() <= options.loop_confirm_translation &&
+           std::abs(normalizeAngle(d.theta)) <= options.loop_confirm_rotation;
+  };
+  // Largest mutually agreeing set, greedily from each seed (the candidate sets are small: tens of loops).
+  std::vector<std::size_t> best;
+  for (std::size_t s = 0; s < cand.size(); ++s) {
+    std::vector<std::size_t> set{cand[s]};
+    for (std::size_t c = 0; c < cand.size(); ++c) {
+      if (c == s) continue;
+      bool ok = true;
+      for (std::size_t m : set) ok = ok && agree(m, cand[c]) && agree(cand[c], m);
+      if (ok) set.push_back(cand[c]);
+    }
+    if (set.size() > best.size()) best = std::move(set);
+  }
+  if (static_cast<int>(best.size()) < options.loop_readmit_min_set) return false;
+  double span = 0.0;
+  for (std::size_t i : best)
+    for (std::size_t j : best)
+      span = std::max(span, (pose(edges[loop_factors[i].edge].to).t - pose(edges[loop_factors[j].edge].to).t).norm());
+  if (span < options.loop_readmit_min_span) return false;
+  for (std::size_t i : best) {
+    graph.setRobustKernel(loop_factors[i].factor, readmit_kernel);
+    loop_factors[i].readmitted = true;
+  }
+  stats.loops_readmitted += best.size();
+  return true;
+}
+
 OptimizerSummary GraphSlam::Impl::optimize() {
   const auto t0 = Clock::now();
   OptimizerSummary s;
   if (graph.variables().empty()) return s;
   s = optimizer.optimize(graph);
   for (SlamNode& n : nodes) n.global_pose = graph.pose2(n.id);
+  if (readmitAgreeingLoops()) {
+    s = optimizer.optimize(graph);
+    for (SlamNode& n : nodes) n.global_pose = graph.pose2(n.id);
+  }
   if (last_node) {
     const SlamNode& n = nodes[static_cast<std::size_t>(*last_node)];
     map_to_local = compose(n.global_pose, inverse(n.local_pose));

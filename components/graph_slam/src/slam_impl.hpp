@@ -73,6 +73,13 @@ struct GraphSlam::Impl {
   std::vector<LoopMatch> pending_global;  ///< unverified global detections (Stüde n_ver rule)
   std::vector<LoopMatch> pending_local;   ///< local matches waiting for loop_confirmations agreeing ones
   RobustKernel loop_kernel;
+  RobustKernel readmit_kernel;
+  /// Loop edges of this session with their factor in `graph` (re-admission changes their kernel).
+  struct LoopFactor {
+    std::size_t edge = 0, factor = 0;
+    bool readmitted = false;
+  };
+  std::vector<LoopFactor> loop_factors;
   /// Index of the current trajectory's first node: nodes before it are the working memory it must be linked
   /// to (earlier sessions after load(), earlier trajectories after a lost event). α = n_local / n_WM uses it.
   std::size_t trajectory_first_node = 0;
@@ -121,6 +128,9 @@ struct GraphSlam::Impl {
                                        double min_score);
   bool verifyGlobal(const std::vector<LoopMatch>& fresh, std::vector<LoopMatch>& agreeing);
   void addLoopEdge(std::int64_t node, const LoopMatch& m);
+  /// loop_readmit_*: gives the largest set of recent, mutually agreeing loops the optimization left suppressed
+  /// the re-admission kernel; true if it changed a kernel.
+  bool readmitAgreeingLoops();
   void localizeScan(const LocalResult& r, const sim::LaserScan& scan, ScanUpdate& update);
   /// Matches an inserted scan against the map and moves map_to_local to the best match (localization-only
   /// mode, and revisits in mapping mode).

@@ -104,6 +104,13 @@ std::vector<SlamParam> makeTable() {
   t.push_back(param("loop_confirm_window", "nodes a pending loop match waits for confirmation", &SlamOptions::loop_confirm_window, 1, 1e6));
   t.push_back(param("loop_confirm_translation", "agreement of confirming matches (m)", &SlamOptions::loop_confirm_translation, 0, 100));
   t.push_back(param("loop_confirm_rotation", "agreement of confirming matches (rad)", &SlamOptions::loop_confirm_rotation, 0, 3.2));
+  t.push_back(param("loop_readmit_min_set", "agreeing suppressed loops re-admitted with loop_readmit_kernel (0: off)",
+                    &SlamOptions::loop_readmit_min_set, 0, 1000));
+  t.push_back(param("loop_readmit_window", "nodes back in which suppressed loops are checked for agreement",
+                    &SlamOptions::loop_readmit_window, 1, 1e6));
+  t.push_back(param("loop_readmit_chi2", "residual χ² from which a loop counts as suppressed", &SlamOptions::loop_readmit_chi2, 0, 1e6));
+  t.push_back(param("loop_readmit_min_span", "span of the agreeing loops' query nodes (m)", &SlamOptions::loop_readmit_min_span, 0, 1e4));
+  t.push_back(param("loop_readmit_kernel", "robust kernel of re-admitted loops (huber:1, none, ...)", &SlamOptions::loop_readmit_kernel));
   t.push_back(param("verifier_local_threshold", "boosted verifier score needed in the local search",
                     &SlamOptions::verifier_local_threshold, -100, 100));
   t.push_back(param("alpha_min", "global search until n_local/n_WM ≥ α_min; Stüde App. A 0.5", &SlamOptions::alpha_min, 0, 1));

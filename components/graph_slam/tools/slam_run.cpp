@@ -352,6 +352,7 @@ int slamRunVerb(const std::vector<std::string>& args) {
         .integer("revisit_localized_scans", static_cast<long long>(st.revisit_scans))
         .integer("localization_matches", static_cast<long long>(st.localization_matches))
         .integer("localization_gated", static_cast<long long>(st.localization_gated))
+        .integer("loops_readmitted", static_cast<long long>(st.loops_readmitted))
         .integer("optimizations", static_cast<long long>(st.optimizations))
         .num("data_duration_s", duration)
         .num("runtime_s", runtime)

@@ -98,6 +98,19 @@ struct SlamOptions {
   int loop_confirm_window = 30;
   double loop_confirm_translation = 0.3;
   double loop_confirm_rotation = 0.05;
+  /// Re-admission of agreeing loops (ours, after the pairwise consistency of PCM, Mangelson et al. ICRA 2018).
+  /// DCS judges each loop against the current estimate, so a run of correct loops that all ask for the same
+  /// large correction (drift along a corridor, a trajectory placed by a global search) is switched off loop by
+  /// loop. After an optimization, loops of the last loop_readmit_window nodes that it left with a residual χ²
+  /// above loop_readmit_chi2 are checked pairwise: two agree when the cycle loop i → estimated path between the
+  /// query nodes → loop j back → estimated path between the targets closes within loop_confirm_translation /
+  /// loop_confirm_rotation. At least loop_readmit_min_set mutually agreeing loops whose query nodes span
+  /// loop_readmit_min_span metres get loop_readmit_kernel, and the graph is optimized again. 0 disables.
+  int loop_readmit_min_set = 6;
+  int loop_readmit_window = 90;
+  double loop_readmit_chi2 = 11.34;  ///< χ²₃ 99 %
+  double loop_readmit_min_span = 2.0;
+  std::string loop_readmit_kernel = "huber:1";
   /// Local search: candidates whose boosted verifier score is below this are not matched (the strict model
   /// threshold is kept for the global search, where nothing else constrains a match; inside the eq. 3.8 radius
   /// the geometric match and the confirmation rule do the rest).
@@ -187,6 +200,7 @@ struct SlamStats {
   std::size_t revisit_scans = 0;       ///< inserted scans on mapped ground that became no node (revisit_radius)
   std::size_t localization_matches = 0;  ///< matches of a scan (no node) to the map taken (localization, revisits)
   std::size_t localization_gated = 0;    ///< such matches not taken: beyond χ²₃ 99.9 % of the predicted pose
+  std::size_t loops_readmitted = 0;      ///< loop edges given loop_readmit_kernel (agreeing, left suppressed by DCS)
 };
 
 struct ScanUpdate {
