@@ -67,6 +67,9 @@ void GraphSlam::Impl::startTrajectory() {
   localized_at.reset();
   revisit_anchor.reset();
   revisited_since_node = false;
+  prelink_scans.clear();
+  prelink_inserted = 0;
+  prelink_links.clear();
   cov_since_loop.setZero();
   pending_global.clear();
   links = 0;
@@ -132,8 +135,22 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
     localizeScan(*r, scan, update);
     return update;
   }
-  if (r->inserted)
-    revisit_anchor = options.revisit_radius > 0.0 && last_node && linked
+  if (options.revisit_radius > 0.0 && !linked && !last_node && trajectory_first_node > 0 &&
+      prelink_inserted < options.revisit_link_scans) {
+    // A new session (or trajectory after a lost event) looks for itself in the map without adding nodes.
+    if (r->inserted) {
+      ++prelink_inserted;
+      matchToMap(*r, scan, update);
+      collectFinishedSubmaps();
+    }
+    prelink_scans.emplace_back(scan.stamp, r->local_pose);
+    current_pose = compose(map_to_local, r->local_pose);
+    if (linked) flushPrelinkScans(std::nullopt);
+    reportPose(update);
+    return update;
+  }
+  if (r->inserted || !last_node)  // (a trajectory linked without nodes must not make its first node of any scan)
+    revisit_anchor = options.revisit_radius > 0.0 && linked
                          ? mappedNodeNear(compose(map_to_local, r->local_pose), r->stamp)
                          : std::nullopt;
   if (revisit_anchor) {
@@ -152,6 +169,7 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
     return update;
   }
   if (r->inserted || !last_node) takeNode(*r, scan, update);
+  if (!prelink_scans.empty()) flushPrelinkScans(last_node);  // the search without nodes gave up
   const SlamNode& n = nodes[static_cast<std::size_t>(*last_node)];
   const Pose2 rel = between(n.local_pose, r->local_pose);
   records.push_back({scan.stamp, n.id, rel});
@@ -574,6 +592,22 @@ int GraphSlam::Impl::searchLoops(std::int64_t id) {
   return added;
 }
 
+void GraphSlam::Impl::flushPrelinkScans(std::optional<std::int64_t> node) {
+  for (const auto& [stamp, local_pose] : prelink_scans) {
+    if (node) {
+      const SlamNode& n = nodes[static_cast<std::size_t>(*node)];
+      records.push_back({stamp, n.id, between(n.local_pose, local_pose)});
+      continue;
+    }
+    const Pose2 pose = compose(map_to_local, local_pose);
+    const SlamNode* nearest = nullptr;
+    for (const SlamNode& k : nodes)
+      if (!nearest || (k.global_pose.t - pose.t).squaredNorm() < (nearest->global_pose.t - pose.t).squaredNorm()) nearest = &k;
+    records.push_back({stamp, nearest->id, between(nearest->global_pose, pose)});
+  }
+  prelink_scans.clear();
+}
+
 std::optional<std::int64_t> GraphSlam::Impl::mappedNodeNear(const Pose2& pose, double stamp) const {
   std::optional<std::int64_t> best;
   double best_d2 = options.revisit_radius * options.revisit_radius;
@@ -636,10 +670,22 @@ void GraphSlam::Impl::matchToMap(const LocalResult& r, const sim::LaserScan& sca
       std::vector<LoopMatch> fresh = globalSearch(q);
       std::vector<LoopMatch> agreeing;
       if (!fresh.empty() && verifyGlobal(fresh, agreeing)) {
-        found.push_back(agreeing.front());
-        linked = true;
-        placed_globally = true;
         pending_global.clear();
+        // Localization links on the first verified detection; a mapping session searching without nodes
+        // (revisit_link_scans) waits for n_start of them that agree on where the trajectory sits, as the
+        // node-based search waits for n_start links, since a wrong link there would map a second copy.
+        const LoopMatch newest = agreeing.front();
+        prelink_links.push_back(newest);
+        std::erase_if(prelink_links, [&](const LoopMatch& o) {
+          const Pose2 d = between(newest.implied_map_to_local, o.implied_map_to_local);
+          return d.t.norm() > 0.5 || std::abs(normalizeAngle(d.theta)) > 0.2;
+        });
+        if (options.localization_only || static_cast<int>(prelink_links.size()) >= options.n_start) {
+          found.push_back(newest);
+          linked = true;
+          placed_globally = true;
+          prelink_links.clear();
+        }
       }
     }
     std::sort(found.begin(), found.end(), [](const LoopMatch& a, const LoopMatch& b) { return a.score > b.score; });

@@ -106,6 +106,14 @@ struct GraphSlam::Impl {
   std::optional<std::int64_t> revisit_anchor;
   bool revisited_since_node = false;  ///< the next node follows a revisit: placed by the localized pose
   std::optional<Pose2> localized_at;  ///< local pose of the last scan matchToMap() predicted to (process noise)
+  /// revisit_link_scans: scans of the current trajectory taken while it looked for itself in the map without
+  /// nodes (stamp, local pose), and how many inserted scans that search has used.
+  std::vector<std::pair<double, Pose2>> prelink_scans;
+  int prelink_inserted = 0;
+  std::vector<LoopMatch> prelink_links;  ///< its verified global detections so far (n_start must agree)
+  /// Records for prelink_scans: relative to the nearest node at their map pose (once linked), or to the
+  /// trajectory's first node (`node`, when it gave up and started mapping).
+  void flushPrelinkScans(std::optional<std::int64_t> node);
   void applyInitialPose(const Pose2& local_pose);
   /// The scan's answer: current_pose with the covariance since the last loop, and whether the trajectory is linked.
   void reportPose(ScanUpdate& update) const;

@@ -126,6 +126,8 @@ std::vector<SlamParam> makeTable() {
                     &SlamOptions::revisit_radius, 0, 100));
   t.push_back(param("revisit_angle", "heading difference within which an older node counts as revisited (rad)",
                     &SlamOptions::revisit_angle, 0, 3.15));
+  t.push_back(param("revisit_link_scans", "with revisit_radius: inserted scans a new session tries to find itself in the map without nodes (0: off)",
+                    &SlamOptions::revisit_link_scans, 0, 1000000));
   return t;
 }
 

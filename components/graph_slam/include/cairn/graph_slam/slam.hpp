@@ -143,6 +143,13 @@ struct SlamOptions {
   double revisit_radius = 0.0;
   /// Heading difference within which a node counts as the same view (π: any, for 360° lasers).
   double revisit_angle = 3.14159265358979323846;
+  /// With revisit_radius: a new session on a loaded map (or a new trajectory after a lost event) first tries to
+  /// find itself in the map for up to this many inserted scans without adding nodes, as localization does
+  /// (global search with the scan as query); linked, it goes on as on mapped ground. Only if that fails (new
+  /// ground) does it add nodes, which are then linked by the node-based global search. Without this, every
+  /// session left the nodes it mapped before its link in the graph (7-8 per replay of ACES). 0: nodes from the
+  /// first scan.
+  int revisit_link_scans = 50;
 };
 
 enum class EdgeKind : std::uint8_t { kSequential = 0, kLoop = 1, kPrior = 2 };
