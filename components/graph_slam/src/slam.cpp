@@ -127,8 +127,13 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
   if (initial_pose) applyInitialPose(r->local_pose);
   // Held-back scans that went in now become nodes first, as if they had not been held back.
   if (!r->flushed.empty() && r->flushed.size() == held_scans.size() && !options.localization_only)
-    for (std::size_t i = 0; i < r->flushed.size(); ++i)
-      if (r->flushed[i].inserted) takeNode(r->flushed[i], held_scans[i], update);
+    for (std::size_t i = 0; i < r->flushed.size(); ++i) {
+      const LocalResult& f = r->flushed[i];
+      // On mapped ground (revisit_radius) a flushed scan becomes no node either (it has its record already).
+      if (!f.inserted || (options.revisit_radius > 0.0 && linked && mappedNodeNear(compose(map_to_local, f.local_pose), f.stamp)))
+        continue;
+      takeNode(f, held_scans[i], update);
+    }
   if (!r->flushed.empty()) held_scans.clear();
   if (r->held) held_scans.push_back(scan);
   if (options.localization_only) {
