@@ -125,12 +125,18 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
   }
   ScanUpdate update;
   if (initial_pose) applyInitialPose(r->local_pose);
+  // revisit_link_scans: a new session (or trajectory after a lost event) looks for itself in the map without
+  // adding nodes.
+  const bool prelink = options.revisit_radius > 0.0 && !linked && !last_node && trajectory_first_node > 0 &&
+                       prelink_inserted < options.revisit_link_scans;
   // Held-back scans that went in now become nodes first, as if they had not been held back.
   if (!r->flushed.empty() && r->flushed.size() == held_scans.size() && !options.localization_only)
     for (std::size_t i = 0; i < r->flushed.size(); ++i) {
       const LocalResult& f = r->flushed[i];
-      // On mapped ground (revisit_radius) a flushed scan becomes no node either (it has its record already).
-      if (!f.inserted || (options.revisit_radius > 0.0 && linked && mappedNodeNear(compose(map_to_local, f.local_pose), f.stamp)))
+      // While looking for the map, or on mapped ground (revisit_radius), a flushed scan becomes no node either
+      // (it has its record already).
+      if (!f.inserted || prelink ||
+          (options.revisit_radius > 0.0 && linked && mappedNodeNear(compose(map_to_local, f.local_pose), f.stamp)))
         continue;
       takeNode(f, held_scans[i], update);
     }
@@ -140,9 +146,7 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
     localizeScan(*r, scan, update);
     return update;
   }
-  if (options.revisit_radius > 0.0 && !linked && !last_node && trajectory_first_node > 0 &&
-      prelink_inserted < options.revisit_link_scans) {
-    // A new session (or trajectory after a lost event) looks for itself in the map without adding nodes.
+  if (prelink) {
     if (r->inserted) {
       ++prelink_inserted;
       matchToMap(*r, scan, update);
