@@ -449,7 +449,7 @@ TEST(GraphSlam, KidnappedRobotIsDetectedAndPlacedByAGlobalSearch) {
   };
   gs::SlamOptions huber = simOptions();
   huber.loop_kernel = "huber:1";
-  gs::SlamOptions revisit = simOptions();  // lost while revisiting mapped ground: the new trajectory maps anew
+  gs::SlamOptions revisit = simOptions();  // lost with revisit_radius: the new trajectory looks for the map first
   revisit.revisit_radius = 1.0;
   gs::SlamOptions no_readmit = simOptions();
   no_readmit.loop_readmit_min_set = 0;
