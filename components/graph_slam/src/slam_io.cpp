@@ -318,7 +318,7 @@ GraphSlam GraphSlam::load(const std::string& path, SlamOptions options) {
     rec.node = r.get<std::int64_t>();
     if (rec.node < 0 || static_cast<std::uint64_t>(rec.node) >= n_nodes) r.fail("scan record refers to unknown node");
     rec.relative = r.pose();
-    s.records.push_back(rec);
+    if (s.options.load_scan_records) s.records.push_back(rec);  // read (and checked) either way
   }
   if (r.pos() != end) r.fail("trailing bytes");
   s.caches.resize(s.submaps.size());

@@ -128,6 +128,8 @@ std::vector<SlamParam> makeTable() {
                     &SlamOptions::revisit_angle, 0, 3.15));
   t.push_back(param("revisit_link_scans", "with revisit_radius: inserted scans a new session tries to find itself in the map without nodes (0: off)",
                     &SlamOptions::revisit_link_scans, 0, 1000000));
+  t.push_back(param("load_scan_records", "load(): keep the loaded sessions' scan poses (false: the map only)",
+                    &SlamOptions::load_scan_records));
   return t;
 }
 

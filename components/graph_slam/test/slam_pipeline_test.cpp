@@ -336,6 +336,16 @@ TEST(GraphSlam, SaveLoadRoundTripAndBrokenFilesGiveClearErrors) {
   gs::GraphSlam::load(again, simOptions()).save(third);
   EXPECT_EQ(readBytes(again).size(), bytes.size());
   EXPECT_TRUE(readBytes(third) == readBytes(again)) << "save -> load -> save changed the state";
+  // load_scan_records false: the map without the loaded session's scan poses (a daily reload keeps a bounded file).
+  gs::SlamOptions map_only = simOptions();
+  map_only.load_scan_records = false;
+  const gs::GraphSlam bare = gs::GraphSlam::load(path, map_only);
+  EXPECT_EQ(bare.nodes().size(), slam.nodes().size());
+  EXPECT_EQ(bare.edges().size(), slam.edges().size());
+  EXPECT_TRUE(bare.trajectory().empty());
+  const std::string bare_path = (d / "bare.cslam").string();
+  bare.save(bare_path);
+  EXPECT_EQ(readBytes(bare_path).size(), bytes.size() - 40 * a.size());  // 40 bytes per scan record
   auto expectError = [&](const std::string& content, const std::string& needle) {
     const std::string p = (d / "broken.cslam").string();
     std::ofstream(p, std::ios::binary) << content;

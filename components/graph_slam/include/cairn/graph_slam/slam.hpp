@@ -150,6 +150,10 @@ struct SlamOptions {
   /// session left the nodes it mapped before its link in the graph (7-8 per replay of ACES). 0: nodes from the
   /// first scan.
   int revisit_link_scans = 50;
+  /// load(): keep the loaded sessions' scan records (the pose of every scan, 40 bytes each: trajectory(),
+  /// poses.txt). false drops them, so a state saved again holds the map (nodes, submaps, edges) and only the new
+  /// session's scan poses: a robot that reloads and re-saves its map every day then keeps a bounded file.
+  bool load_scan_records = true;
 };
 
 enum class EdgeKind : std::uint8_t { kSequential = 0, kLoop = 1, kPrior = 2 };
