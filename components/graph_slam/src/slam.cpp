@@ -28,6 +28,15 @@ double seconds(Clock::time_point since) {
 
 Pose2 between(const Pose2& a, const Pose2& b) { return compose(inverse(a), b); }
 
+/// A relative pose (or error) within the bounds: translation (m) and rotation (rad).
+bool within(const Pose2& d, double max_translation, double max_rotation) {
+  return !(d.t.norm() > max_translation || std::abs(normalizeAngle(d.theta)) > max_rotation);
+}
+
+/// Global detections agree on where the query trajectory sits when their implied local->map transforms are
+/// within these bounds (2D reading of Stüde's r_ver rule; chosen, see README).
+constexpr double kPlacementTranslation = 0.5, kPlacementRotation = 0.2;
+
 Eigen::Matrix2d rot(double th) { return rotation2(th); }
 
 }  // namespace
@@ -492,8 +501,8 @@ std::vector<LoopMatch> GraphSlam::Impl::confirmLocal(const std::vector<LoopMatch
     for (std::size_t i = 0; i < pending_local.size(); ++i) {
       const LoopMatch& o = pending_local[i];
       if (o.query == m.query) continue;  // another match of the same scan is not an independent confirmation
-      const Pose2 d = between(m.implied_map_to_local, o.implied_map_to_local);
-      if (d.t.norm() <= options.loop_confirm_translation && std::abs(d.theta) <= options.loop_confirm_rotation)
+      if (within(between(m.implied_map_to_local, o.implied_map_to_local), options.loop_confirm_translation,
+                 options.loop_confirm_rotation))
         agree.push_back(i);
     }
     if (static_cast<int>(agree.size()) >= options.loop_confirmations) {
@@ -520,8 +529,8 @@ bool GraphSlam::Impl::verifyGlobal(const std::vector<LoopMatch>& fresh, std::vec
     for (const LoopMatch& o : pending_global) {
       const Pose2& b = nodes[static_cast<std::size_t>(o.target)].global_pose;
       if ((a.t - b.t).norm() > options.r_ver) continue;
-      const Pose2 d = between(m.implied_map_to_local, o.implied_map_to_local);
-      if (d.t.norm() > 0.5 || std::abs(d.theta) > 0.2) continue;
+      if (!within(between(m.implied_map_to_local, o.implied_map_to_local), kPlacementTranslation, kPlacementRotation))
+        continue;
       agreeing.push_back(o);
     }
     if (static_cast<int>(agreeing.size()) >= 1 + options.n_ver) return true;
@@ -686,8 +695,8 @@ void GraphSlam::Impl::matchToMap(const LocalResult& r, const sim::LaserScan& sca
         const LoopMatch newest = agreeing.front();
         prelink_links.push_back(newest);
         std::erase_if(prelink_links, [&](const LoopMatch& o) {
-          const Pose2 d = between(newest.implied_map_to_local, o.implied_map_to_local);
-          return d.t.norm() > 0.5 || std::abs(normalizeAngle(d.theta)) > 0.2;
+          return !within(between(newest.implied_map_to_local, o.implied_map_to_local), kPlacementTranslation,
+                         kPlacementRotation);
         });
         if (options.localization_only || static_cast<int>(prelink_links.size()) >= options.n_start) {
           found.push_back(newest);
@@ -731,6 +740,11 @@ void GraphSlam::Impl::matchToMap(const LocalResult& r, const sim::LaserScan& sca
   }
 }
 
+Pose2 GraphSlam::Impl::loopResidual(const SlamEdge& e) const {
+  return compose(inverse(e.z), between(nodes[static_cast<std::size_t>(e.from)].global_pose,
+                                       nodes[static_cast<std::size_t>(e.to)].global_pose));
+}
+
 bool GraphSlam::Impl::readmitAgreeingLoops() {
   if (options.loop_readmit_min_set <= 0 || !last_node) return false;
   // Suppressed recent loops: residual χ² of the constraint at the current solution above the threshold.
@@ -740,7 +754,7 @@ bool GraphSlam::Impl::readmitAgreeingLoops() {
     const LoopFactor& lf = loop_factors[i];
     const SlamEdge& e = edges[lf.edge];
     if (lf.readmitted || *last_node - e.to > options.loop_readmit_window) continue;
-    const Pose2 err = compose(inverse(e.z), between(pose(e.from), pose(e.to)));
+    const Pose2 err = loopResidual(e);
     const Eigen::Vector3d r(err.t.x(), err.t.y(), normalizeAngle(err.theta));
     if (r.dot(e.information * r) > options.loop_readmit_chi2) cand.push_back(i);
   }
@@ -752,9 +766,7 @@ bool GraphSlam::Impl::readmitAgreeingLoops() {
     const SlamEdge& b = edges[loop_factors[j].edge];
     const Pose2 via_j = compose(between(pose(a.from), pose(b.from)), b.z);
     const Pose2 via_i = compose(a.z, between(pose(a.to), pose(b.to)));
-    const Pose2 d = between(via_i, via_j);
-    return d.t.norm() <= options.loop_confirm_translation &&
-           std::abs(normalizeAngle(d.theta)) <= options.loop_confirm_rotation;
+    return within(between(via_i, via_j), options.loop_confirm_translation, options.loop_confirm_rotation);
   };
   // Largest mutually agreeing set, greedily from each seed (the candidate sets are small: tens of loops).
   std::vector<std::size_t> best;
@@ -865,10 +877,7 @@ std::size_t GraphSlam::inconsistentLoops(double max_translation, double max_rota
   std::size_t bad = 0;
   for (const SlamEdge& e : impl_->edges) {
     if (e.kind != EdgeKind::kLoop) continue;
-    const Pose2 est = between(impl_->nodes[static_cast<std::size_t>(e.from)].global_pose,
-                              impl_->nodes[static_cast<std::size_t>(e.to)].global_pose);
-    const Pose2 err = compose(inverse(e.z), est);
-    if (err.t.norm() > max_translation || std::abs(normalizeAngle(err.theta)) > max_rotation) ++bad;
+    if (!within(impl_->loopResidual(e), max_translation, max_rotation)) ++bad;
   }
   return bad;
 }

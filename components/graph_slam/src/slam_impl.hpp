@@ -139,6 +139,8 @@ struct GraphSlam::Impl {
   /// loop_readmit_*: gives the largest set of recent, mutually agreeing loops the optimization left suppressed
   /// the re-admission kernel; true if it changed a kernel.
   bool readmitAgreeingLoops();
+  /// A loop edge's constraint against the current estimate: z⁻¹ ∘ (from⁻¹ ∘ to).
+  Pose2 loopResidual(const SlamEdge& e) const;
   void localizeScan(const LocalResult& r, const sim::LaserScan& scan, ScanUpdate& update);
   /// Matches an inserted scan against the map and moves map_to_local to the best match (localization-only
   /// mode, and revisits in mapping mode).
