@@ -144,9 +144,7 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
       const LocalResult& f = r->flushed[i];
       // While looking for the map, or on mapped ground (revisit_radius), a flushed scan becomes no node either
       // (it has its record already).
-      if (!f.inserted || prelink ||
-          (options.revisit_radius > 0.0 && linked && mappedNodeNear(compose(map_to_local, f.local_pose), f.stamp)))
-        continue;
+      if (!f.inserted || prelink || revisitAnchor(f)) continue;
       takeNode(f, held_scans[i], update);
     }
   if (!r->flushed.empty()) held_scans.clear();
@@ -168,9 +166,7 @@ std::optional<ScanUpdate> GraphSlam::Impl::addScan(const sim::LaserScan& scan, c
     return update;
   }
   if (r->inserted || !last_node)  // (a trajectory linked without nodes must not make its first node of any scan)
-    revisit_anchor = options.revisit_radius > 0.0 && linked
-                         ? mappedNodeNear(compose(map_to_local, r->local_pose), r->stamp)
-                         : std::nullopt;
+    revisit_anchor = revisitAnchor(*r);
   if (revisit_anchor) {
     // Mapped ground (revisit_radius): no node; the scan is matched against the map instead, as in
     // localization-only mode, and recorded relative to the nearest mapped node at its localized pose.
@@ -638,6 +634,11 @@ std::optional<std::int64_t> GraphSlam::Impl::mappedNodeNear(const Pose2& pose, d
     best_d2 = d2;
   }
   return best;
+}
+
+std::optional<std::int64_t> GraphSlam::Impl::revisitAnchor(const LocalResult& r) const {
+  if (options.revisit_radius <= 0.0 || !linked) return std::nullopt;
+  return mappedNodeNear(compose(map_to_local, r.local_pose), r.stamp);
 }
 
 void GraphSlam::Impl::collectFinishedSubmaps() {

@@ -148,6 +148,9 @@ struct GraphSlam::Impl {
   /// revisit_radius: the nearest older node (loop_min_time_gap, or another trajectory) near `pose` (map
   /// frame), if any.
   std::optional<std::int64_t> mappedNodeNear(const Pose2& pose, double stamp) const;
+  /// revisit_radius, linked: the node a scan of local SLAM is recorded to instead of becoming a node (mapped
+  /// ground), if any.
+  std::optional<std::int64_t> revisitAnchor(const LocalResult& r) const;
   /// Takes LocalSlam's newly finished submaps: those with nodes become loop-closure targets, the others (no
   /// node went into them: revisits, localization) are dropped, so LocalSlam holds only its active ones.
   void collectFinishedSubmaps();
