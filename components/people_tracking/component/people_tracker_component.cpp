@@ -168,6 +168,7 @@ class PeopleTracker : public cairn::Node {
     tp.leg_gate_chi2 = declareRanged<double>("tracker.leg_gate_chi2", tp.leg_gate_chi2, "chi-square gate (2 dof) of a leg around a track");
     tp.reid_window = declareRanged<double>("tracker.reid_window", tp.reid_window, "s, deleted tracks can give their id to a new track this long (0: off)");
     tp.reid_gate_chi2 = declareRanged<double>("tracker.reid_gate_chi2", tp.reid_gate_chi2, "chi-square gate (2 dof) of re-identification");
+    tp.reid_max_distance = declareRanged<double>("tracker.reid_max_distance", tp.reid_max_distance, "m, re-identification also needs the new track this close to the deleted track's prediction");
     tp.visibility_radius = declareRanged<double>("tracker.visibility_radius", tp.visibility_radius, "m, beams this close to a track decide occluded / free space / missed");
     tp.occluded_coast_time = declareRanged<double>("tracker.occluded_coast_time", tp.occluded_coast_time, "s, occluded confirmed tracks are published this long");
     tp.occluded_delete_timeout = declareRanged<double>("tracker.occluded_delete_timeout", tp.occluded_delete_timeout, "s without update deletes a track occluded since its last update");

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <random>
@@ -237,6 +238,9 @@ BenchResult runBench(const BenchParams& params) {
   PeopleTracker tracker(params.tracker);
   NearestNeighbourTracker baseline;
   ClearMot mot(params.match_threshold), mot_base(params.match_threshold);
+  Hota hota(2 * params.match_threshold, params.match_threshold), hota_base(2 * params.match_threshold, params.match_threshold);
+  IdF1 idf1(params.match_threshold), idf1_base(params.match_threshold);
+  Ospa ospa(2 * params.match_threshold, 1.0, params.match_threshold), ospa_base(2 * params.match_threshold, 1.0, params.match_threshold);
   std::mt19937_64 rng(mix(params.seed, 1));
   std::mt19937_64 oracle_rng(mix(params.seed, 2));  // separate stream: the scans stay those of a normal run
   std::mt19937_64 camera_rng(mix(params.seed, 3));  // likewise
@@ -265,6 +269,9 @@ BenchResult runBench(const BenchParams& params) {
     dc_csv.open(params.dump_dir + "/dontcare.csv");
     robot_csv.open(params.dump_dir + "/robot.csv");
     if (!gt_csv || !tr_csv || !leg_csv || !all_csv || !match_csv || !dc_csv || !robot_csv) throw InputError("cannot write into dump directory " + params.dump_dir);
+    // Round-trip precision: an external scorer reading these files sees the positions the bench scored.
+    for (std::ofstream* f : {&gt_csv, &tr_csv, &leg_csv, &all_csv, &match_csv, &dc_csv, &robot_csv})
+      f->precision(std::numeric_limits<double>::max_digits10);
     gt_csv << "t,id,x,y\n";
     tr_csv << "t,id,x,y\n";
     leg_csv << "t,x,y,confidence\n";
@@ -374,6 +381,12 @@ BenchResult runBench(const BenchParams& params) {
       if (inRange(o.p)) hyp_base.push_back(o);
     mot.addFrame(gt, hyp, dont_care);
     mot_base.addFrame(gt, hyp_base, dont_care);
+    hota.addFrame(gt, hyp, dont_care);
+    hota_base.addFrame(gt, hyp_base, dont_care);
+    idf1.addFrame(gt, hyp, dont_care);
+    idf1_base.addFrame(gt, hyp_base, dont_care);
+    ospa.addFrame(gt, hyp, dont_care);
+    ospa_base.addFrame(gt, hyp_base, dont_care);
     if (gt_csv.is_open()) {
       for (const auto& g : gt) gt_csv << t << ',' << g.id << ',' << g.p.x() << ',' << g.p.y() << '\n';
       for (const auto& d : dont_care) dc_csv << t << ',' << d.x() << ',' << d.y() << '\n';
@@ -395,18 +408,30 @@ BenchResult runBench(const BenchParams& params) {
   result.mean_people_counted = result.scans ? counted_sum / static_cast<double>(result.scans) : 0.0;
   result.cairn.mot = mot.metrics();
   result.baseline.mot = mot_base.metrics();
+  result.cairn.hota = hota.metrics();
+  result.baseline.hota = hota_base.metrics();
+  result.cairn.id = idf1.metrics();
+  result.baseline.id = idf1_base.metrics();
+  result.cairn.ospa = ospa.mean();
+  result.baseline.ospa = ospa_base.mean();
   return result;
 }
 
 std::string benchJson(const BenchParams& p, const BenchResult& r) {
   auto run = [&](const BenchRun& b) {
-    char buf[512];
+    char buf[768];
     std::snprintf(buf, sizeof buf,
                   "{\"mota\": %.4f, \"motp\": %.4f, \"id_switches\": %zu, \"id_switches_per_100_tracks\": %.3f, "
                   "\"fp\": %zu, \"fn\": %zu, \"matches\": %zu, \"gt\": %zu, \"gt_tracks\": %zu, "
+                  "\"hota\": %.4f, \"deta\": %.4f, \"assa\": %.4f, \"loca\": %.4f, \"hota_at_0_5\": %.4f, "
+                  "\"deta_at_0_5\": %.4f, \"assa_at_0_5\": %.4f, \"idf1\": %.4f, \"idp\": %.4f, \"idr\": %.4f, "
+                  "\"ospa_m\": %.4f, "
                   "\"scans_per_second\": %.1f}",
                   b.mot.mota(), b.mot.motp(), b.mot.id_switches, b.mot.idSwitchesPer100Tracks(), b.mot.fp, b.mot.fn,
-                  b.mot.matches, b.mot.gt, b.mot.gt_tracks, b.scansPerSecond(r.scans));
+                  b.mot.matches, b.mot.gt, b.mot.gt_tracks, b.hota.hota, b.hota.deta, b.hota.assa, b.hota.loca,
+                  b.hota.hota_alpha[HotaMetrics::kHalf], b.hota.deta_alpha[HotaMetrics::kHalf],
+                  b.hota.assa_alpha[HotaMetrics::kHalf], b.id.idf1, b.id.idp, b.id.idr, b.ospa,
+                  b.scansPerSecond(r.scans));
     return std::string(buf);
   };
   std::ostringstream o;

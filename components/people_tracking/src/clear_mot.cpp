@@ -4,33 +4,36 @@
 
 namespace cairn::people_tracking {
 
+std::vector<MotObject> dropDontCareHypotheses(const std::vector<MotObject>& gt, const std::vector<MotObject>& all_hyp,
+                                              const std::vector<Eigen::Vector2d>& dont_care, double threshold,
+                                              std::size_t* ignored) {
+  if (dont_care.empty() || all_hyp.empty()) return all_hyp;
+  constexpr double kForbidden = 1e9;
+  const std::size_t rows = gt.size() + dont_care.size();
+  Eigen::MatrixXd cost(static_cast<long>(rows), static_cast<long>(all_hyp.size()));
+  for (std::size_t r = 0; r < rows; ++r)
+    for (std::size_t c = 0; c < all_hyp.size(); ++c) {
+      const Eigen::Vector2d& o = r < gt.size() ? gt[r].p : dont_care[r - gt.size()];
+      const double d = (o - all_hyp[c].p).norm();
+      cost(static_cast<long>(r), static_cast<long>(c)) = d <= threshold ? d : kForbidden;
+    }
+  const std::vector<int> match = solveAssignment(cost, kForbidden);
+  std::vector<bool> drop(all_hyp.size(), false);
+  for (std::size_t r = gt.size(); r < rows; ++r)
+    if (match[r] >= 0) drop[static_cast<std::size_t>(match[r])] = true;
+  std::vector<MotObject> hyp;
+  for (std::size_t c = 0; c < all_hyp.size(); ++c) {
+    if (!drop[c]) hyp.push_back(all_hyp[c]);
+    else if (ignored) ++*ignored;
+  }
+  return hyp;
+}
+
 void ClearMot::addFrame(const std::vector<MotObject>& gt, const std::vector<MotObject>& all_hyp,
                         const std::vector<Eigen::Vector2d>& dont_care) {
   constexpr double kForbidden = 1e9;
-  // 0. Don't-care objects (MOTChallenge's distractor preprocessing): hypotheses and all objects, counted or
-  // not, are matched optimally; hypotheses matched to a don't-care object are removed from the frame. A track
-  // on a person who does not count can then not be matched to a counted neighbour.
-  std::vector<MotObject> hyp;
-  if (dont_care.empty()) {
-    hyp = all_hyp;
-  } else if (!all_hyp.empty()) {
-    const std::size_t rows = gt.size() + dont_care.size();
-    Eigen::MatrixXd cost(static_cast<long>(rows), static_cast<long>(all_hyp.size()));
-    for (std::size_t r = 0; r < rows; ++r)
-      for (std::size_t c = 0; c < all_hyp.size(); ++c) {
-        const Eigen::Vector2d& o = r < gt.size() ? gt[r].p : dont_care[r - gt.size()];
-        const double d = (o - all_hyp[c].p).norm();
-        cost(static_cast<long>(r), static_cast<long>(c)) = d <= threshold_ ? d : kForbidden;
-      }
-    const std::vector<int> match = solveAssignment(cost, kForbidden);
-    std::vector<bool> drop(all_hyp.size(), false);
-    for (std::size_t r = gt.size(); r < rows; ++r)
-      if (match[r] >= 0) drop[static_cast<std::size_t>(match[r])] = true;
-    for (std::size_t c = 0; c < all_hyp.size(); ++c) {
-      if (drop[c]) ++m_.ignored;
-      else hyp.push_back(all_hyp[c]);
-    }
-  }
+  // 0. Don't-care objects: a track on a person who does not count can then not be matched to a counted neighbour.
+  const std::vector<MotObject> hyp = dropDontCareHypotheses(gt, all_hyp, dont_care, threshold_, &m_.ignored);
   ++m_.frames;
   m_.gt += gt.size();
   for (const auto& g : gt) seen_gt_[g.id] = true;

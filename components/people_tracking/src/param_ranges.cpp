@@ -51,6 +51,7 @@ constexpr Entry kRanges[] = {
     {"tracker.leg_gate_chi2", {0.1, 100.0}},
     {"tracker.reid_window", {0.0, 60.0}},
     {"tracker.reid_gate_chi2", {0.1, 100.0}},
+    {"tracker.reid_max_distance", {0.0, 1000.0}},
     {"tracker.visibility_radius", {0.05, 2.0}},
     {"tracker.occluded_coast_time", {0.0, 60.0}},
     {"tracker.occluded_delete_timeout", {0.0, 60.0}},

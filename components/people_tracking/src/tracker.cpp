@@ -51,6 +51,7 @@ void checkParams(const TrackerParams& p) {
       {"tracker.leg_gate_chi2", p.leg_gate_chi2},
       {"tracker.reid_window", p.reid_window},
       {"tracker.reid_gate_chi2", p.reid_gate_chi2},
+      {"tracker.reid_max_distance", p.reid_max_distance},
       {"tracker.visibility_radius", p.visibility_radius},
       {"tracker.occluded_coast_time", p.occluded_coast_time},
       {"tracker.occluded_delete_timeout", p.occluded_delete_timeout},
@@ -532,7 +533,7 @@ void PeopleTracker::reidentify(std::size_t new_track) {
     const Eigen::Vector2d nu = n.position() - old.position();
     const Eigen::Matrix2d S = old.positionCovariance() + n.positionCovariance();
     const double d2 = nu.dot(S.ldlt().solve(nu));
-    if (d2 > params_.reid_gate_chi2) continue;
+    if (d2 > params_.reid_gate_chi2 || nu.norm() > params_.reid_max_distance) continue;
     const double cost = d2 + std::log(S.determinant());
     if (cost < best) best = cost, best_k = k;
   }

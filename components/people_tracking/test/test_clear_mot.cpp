@@ -6,6 +6,7 @@
 
 #include "cairn/people_tracking/clear_mot.hpp"
 #include "cairn/people_tracking/scan.hpp"
+#include "cairn/people_tracking/track_metrics.hpp"
 #include "cairn/people_tracking/trajectories.hpp"
 
 using namespace cairn::people_tracking;
@@ -163,4 +164,150 @@ TEST(Trajectories, SmoothingKeepsStraightLinesAndRemovesJitter) {
   EXPECT_THROW(smoothTrajectories(s, 0.0), InputError);
   EXPECT_THROW(smoothTrajectories(s, -1.0), InputError);
   EXPECT_THROW(smoothTrajectories(s, std::nan("")), InputError);
+}
+
+// HOTA and OSPA (track_metrics.hpp) on scripted sequences whose values follow from the definitions by hand.
+namespace {
+Hota scoreHota(const std::vector<std::pair<std::vector<MotObject>, std::vector<MotObject>>>& frames) {
+  Hota h(1.0, 0.5);
+  for (const auto& [gt, hyp] : frames) h.addFrame(gt, hyp);
+  return h;
+}
+}  // namespace
+
+TEST(Hota, PerfectTrackingScoresOneAndOspaZero) {
+  std::vector<std::pair<std::vector<MotObject>, std::vector<MotObject>>> frames;
+  Ospa ospa;
+  for (int t = 0; t < 10; ++t) {
+    frames.push_back({{{1, {0.1 * t, 0}}, {2, {3, 0.1 * t}}}, {{7, {0.1 * t, 0}}, {9, {3, 0.1 * t}}}});
+    ospa.addFrame(frames.back().first, frames.back().second);
+  }
+  const HotaMetrics m = scoreHota(frames).metrics();
+  EXPECT_NEAR(m.hota, 1.0, 1e-12);
+  EXPECT_NEAR(m.deta, 1.0, 1e-12);
+  EXPECT_NEAR(m.assa, 1.0, 1e-12);
+  EXPECT_NEAR(m.loca, 1.0, 1e-12);
+  EXPECT_NEAR(ospa.mean(), 0.0, 1e-12);
+}
+
+TEST(Hota, AnIdSwitchCostsAssociationInProportionToWhatItConfuses) {
+  // One person, 10 frames, tracked exactly; the track id changes after frame 5 (halfway) or after frame 1.
+  auto run = [](int switch_at) {
+    std::vector<std::pair<std::vector<MotObject>, std::vector<MotObject>>> frames;
+    for (int t = 0; t < 10; ++t) frames.push_back({{{1, {0.2 * t, 0}}}, {{t < switch_at ? 10 : 11, {0.2 * t, 0}}}});
+    return scoreHota(frames).metrics();
+  };
+  const HotaMetrics half = run(5), early = run(1);
+  // Halfway: each pair is matched 5 of the person's 10 frames and of the track's 5: Ass-IoU 5 / (10 + 5 - 5).
+  EXPECT_NEAR(half.deta, 1.0, 1e-12);
+  EXPECT_NEAR(half.assa, 0.5, 1e-12);
+  EXPECT_NEAR(half.hota, std::sqrt(0.5), 1e-12);
+  // After the first frame: one match at Ass-IoU 1/10, nine at 9/10.
+  EXPECT_NEAR(early.assa, (1 * 0.1 + 9 * 0.9) / 10, 1e-12);
+  EXPECT_NEAR(early.hota, std::sqrt(0.82), 1e-12);
+  // CLEAR MOT counts one switch either way.
+  for (int at : {1, 5}) {
+    ClearMot mot(0.5);
+    for (int t = 0; t < 10; ++t) mot.addFrame({{1, {0.2 * t, 0}}}, {{t < at ? 10 : 11, {0.2 * t, 0}}});
+    EXPECT_EQ(mot.metrics().id_switches, 1u);
+  }
+}
+
+TEST(Hota, MissesLowerDetectionAndAssociationLocalisationErrorLowersTheHighThresholds) {
+  std::vector<std::pair<std::vector<MotObject>, std::vector<MotObject>>> missed, offset;
+  Ospa ospa;
+  for (int t = 0; t < 10; ++t) {
+    missed.push_back({{{1, {0, 0.3 * t}}}, {}});
+    if (t < 5) missed.back().second.push_back({4, {0, 0.3 * t}});
+    offset.push_back({{{1, {0, 0.3 * t}}}, {{4, {0.25, 0.3 * t}}}});
+    ospa.addFrame(offset.back().first, offset.back().second);
+  }
+  // Tracked in 5 of 10 frames: DetA 5 / (10 + 5 - 5); the person's 5 unmatched frames are FNA: AssA 5 / 10.
+  const HotaMetrics m = scoreHota(missed).metrics();
+  EXPECT_NEAR(m.deta, 0.5, 1e-12);
+  EXPECT_NEAR(m.assa, 0.5, 1e-12);
+  EXPECT_NEAR(m.hota, 0.5, 1e-12);
+  // 0.25 m off with zero_distance 1 m: S = 0.75, a match at alpha 0.05 ... 0.75 (15 of 19) and none above.
+  const HotaMetrics o = scoreHota(offset).metrics();
+  EXPECT_NEAR(o.hota, 15.0 / 19.0, 1e-12);
+  EXPECT_NEAR(o.hota_alpha[14], 1.0, 1e-12);
+  EXPECT_NEAR(o.hota_alpha[15], 0.0, 1e-12);
+  EXPECT_NEAR(o.loca, 0.75, 1e-12);  // over the thresholds with matches
+  EXPECT_NEAR(ospa.mean(), 0.25, 1e-12);
+}
+
+TEST(Hota, MatchingPrefersThePairThatIsAlignedOverTheWholeSequence) {
+  // Track 10 follows person 1 in all 10 frames; in frame 5 it is 0.2 m off and a one-frame hypothesis 11 sits
+  // 0.05 m from the person. Matching by distance alone would give that frame to 11; A_max(1, 10) = 1 vs
+  // A_max(1, 11) = 0.1 keeps 10, so association stays perfect up to alpha 0.8 (S = 0.8 for 10 in frame 5).
+  std::vector<std::pair<std::vector<MotObject>, std::vector<MotObject>>> frames;
+  for (int t = 0; t < 10; ++t) {
+    frames.push_back({{{1, {0.3 * t, 0}}}, {{10, {0.3 * t, t == 5 ? 0.2 : 0.0}}}});
+    if (t == 5) frames.back().second.push_back({11, {0.3 * t, 0.05}});
+  }
+  const HotaMetrics m = scoreHota(frames).metrics();
+  for (int k = 0; k < 16; ++k) EXPECT_NEAR(m.assa_alpha[static_cast<std::size_t>(k)], 1.0, 1e-12) << "alpha " << HotaMetrics::alpha(k);
+  EXPECT_NEAR(m.deta_alpha[0], 10.0 / 11.0, 1e-12);  // 11 is a false positive
+}
+
+TEST(Hota, DontCareRuleAndOspaCardinality) {
+  // A hypothesis on a person who does not count is neither matched nor false: perfect scores.
+  Hota h(1.0, 0.5);
+  Ospa ospa(1.0, 1.0, 0.5);
+  for (int t = 0; t < 4; ++t) {
+    h.addFrame({{1, {0, 0}}}, {{10, {0, 0}}, {20, {5, 0.1}}}, {{5, 0}});
+    ospa.addFrame({{1, {0, 0}}}, {{10, {0, 0}}, {20, {5, 0.1}}}, {{5, 0}});
+  }
+  EXPECT_NEAR(h.metrics().hota, 1.0, 1e-12);
+  EXPECT_NEAR(ospa.mean(), 0.0, 1e-12);
+  // Two people, one hypothesis exactly on one of them: (0 + c) / 2 with c = 1 m.
+  Ospa card(1.0, 1.0);
+  card.addFrame({{1, {0, 0}}, {2, {3, 0}}}, {{10, {0, 0}}});
+  EXPECT_NEAR(card.last(), 0.5, 1e-12);
+  card.addFrame({}, {});  // nothing present: not averaged
+  EXPECT_NEAR(card.mean(), 0.5, 1e-12);
+  // Order 2: sqrt((0.6^2 + 0^2) / 2) for two matched pairs.
+  Ospa two(1.0, 2.0);
+  two.addFrame({{1, {0, 0}}, {2, {3, 0}}}, {{10, {0.6, 0}}, {11, {3, 0}}});
+  EXPECT_NEAR(two.last(), std::sqrt(0.18), 1e-12);
+}
+
+TEST(IdF1, ChargesATrackThatCarriesOneIdOverTwoPeopleWhichClearMotDoesNotCount) {
+  // Person 1 walks for 10 frames and leaves; person 2 appears and walks 10 frames. One track (id 5) follows
+  // person 1 and then person 2. CLEAR MOT counts no switch (person 2 is matched for the first time); IDF1 assigns
+  // track 5 to one of them: IDTP 10 of 20 + 20 frames.
+  ClearMot mot(0.5);
+  IdF1 idf1(0.5);
+  Hota hota(1.0, 0.5);
+  for (int t = 0; t < 20; ++t) {
+    const std::vector<MotObject> gt{{t < 10 ? 1 : 2, {0.1 * t, 0}}};
+    const std::vector<MotObject> hyp{{5, {0.1 * t, 0}}};
+    mot.addFrame(gt, hyp);
+    idf1.addFrame(gt, hyp);
+    hota.addFrame(gt, hyp);
+  }
+  EXPECT_EQ(mot.metrics().id_switches, 0u);
+  EXPECT_NEAR(mot.metrics().mota(), 1.0, 1e-12);
+  const IdF1::Result r = idf1.metrics();
+  EXPECT_EQ(r.idtp, 10u);
+  EXPECT_NEAR(r.idf1, 0.5, 1e-12);
+  EXPECT_NEAR(r.idp, 0.5, 1e-12);
+  EXPECT_NEAR(r.idr, 0.5, 1e-12);
+  EXPECT_NEAR(hota.metrics().assa, 0.5, 1e-12);  // each pair: 10 / (10 + 20 - 10)
+}
+
+TEST(IdF1, AssignmentMaximisesFramesNotPairs) {
+  // Person 1 is tracked by 10 for 10 frames; in the first frame 11 is within 0.5 m of person 1 (not of person 2)
+  // and person 2 within 0.5 m of 10. Maximising the number of assigned pairs would give 1-11 and 2-10 (2 frames);
+  // IDTP must be 10 (1-10).
+  IdF1 idf1(0.5);
+  for (int t = 0; t < 10; ++t) {
+    std::vector<MotObject> gt{{1, {0, 0}}}, hyp{{10, {0, 0}}};
+    if (t == 0) {
+      gt.push_back({2, {0.45, 0}});
+      hyp.push_back({11, {-0.1, -0.4}});
+    }
+    idf1.addFrame(gt, hyp);
+  }
+  EXPECT_EQ(idf1.metrics().idtp, 10u);
 }

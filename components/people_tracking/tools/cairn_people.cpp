@@ -95,7 +95,7 @@ void usage() {
       "  bench --world auto|office|apartment|warehouse|WORLD.yaml --trajectories FILE [--robot-path FILE|circle:R]\n"
       "        [--trajectory-offset X,Y[,THETA]] [--static-map [--static-map-margin M]] [--seed N] [--duration S]\n"
       "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S]\n"
-      "        [--reid-window S] [--publish-coast S] [--split-scans K] [--confirm-hits N] [--single-leg-stride M]\n"
+      "        [--reid-window S] [--reid-max-distance M] [--publish-coast S] [--split-scans K] [--confirm-hits N] [--single-leg-stride M]\n"
       "        [--min-leg-confidence C] [--track-leg-confidence C] [--beams N] [--smooth S] [--dump DIR] [--json]\n"
       "        tracker tuning (README): [--process-noise Q] [--delete-timeout S] [--max-position-sigma M] [--leg-spread M]\n"
       "        [--leg-spread-lateral M] [--leg-gate CHI2] [--occluded-coast S] [--occluded-delete-timeout S]\n"
@@ -105,6 +105,8 @@ void usage() {
       "        second source: [--camera FOV_DEG] [--camera-range M] [--camera-bearing-sigma DEG] [--camera-range-sigma R]\n"
       "        [--camera-pd P] [--camera-false N] [--fusion-distance M] [--fusion-gate CHI2]\n"
       "        diagnostic: [--oracle-detections] [--oracle-sigma M]   (true positions instead of the detector)\n"
+      "        scores cairn and a baseline: CLEAR MOT (MOTA, MOTP, ID switches, FP, FN), HOTA (DetA, AssA, LocA), IDF1,\n"
+      "        OSPA, scans/s (JSON fields: README); tools/score_dump.py rescores a --dump directory independently\n"
       "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--robot follow|route]\n"
       "             [--keep-spurs] [--follow-distance M] [--fov-deg 360] [--range-max 20] [--mask tangents|inside] [--model FILE]\n"
       "             [--heading-drift R] [--scale-error E] [--max-duration S] [--json]");

@@ -72,6 +72,7 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--beams") p.laser_beams = static_cast<int>(integer(value(), 8, 100000));
     else if (a == "--leg-gate") p.tracker.leg_gate_chi2 = param(value(), "tracker.leg_gate_chi2");
     else if (a == "--reid-window") p.tracker.reid_window = param(value(), "tracker.reid_window");
+    else if (a == "--reid-max-distance") p.tracker.reid_max_distance = param(value(), "tracker.reid_max_distance");
     else if (a == "--publish-coast") p.tracker.publish_coast_time = param(value(), "tracker.publish_coast_time");
     else if (a == "--occluded-coast") p.tracker.occluded_coast_time = param(value(), "tracker.occluded_coast_time");
     else if (a == "--occluded-delete-timeout") p.tracker.occluded_delete_timeout = param(value(), "tracker.occluded_delete_timeout");
@@ -117,9 +118,10 @@ int runBenchVerb(int argc, char** argv) {
     std::printf("%s (%s): %zu scans, %.1f s, %.1f people counted per scan on average\n", p.trajectories.c_str(),
                 r.format.c_str(), r.scans, r.duration, r.mean_people_counted);
     for (const auto& [name, b] : {std::pair{"cairn", &r.cairn}, std::pair{"baseline", &r.baseline}})
-      std::printf("  %-8s MOTA %.3f  MOTP %.3f m  IDSW %zu (%.2f per 100 tracks)  FP %zu  FN %zu  %.0f scans/s\n", name,
+      std::printf("  %-8s MOTA %.3f  MOTP %.3f m  IDSW %zu (%.2f per 100 tracks)  FP %zu  FN %zu  HOTA %.3f (DetA %.3f "
+                  "AssA %.3f LocA %.3f)  IDF1 %.3f  OSPA %.3f m  %.0f scans/s\n", name,
                   b->mot.mota(), b->mot.motp(), b->mot.id_switches, b->mot.idSwitchesPer100Tracks(), b->mot.fp,
-                  b->mot.fn, b->scansPerSecond(r.scans));
+                  b->mot.fn, b->hota.hota, b->hota.deta, b->hota.assa, b->hota.loca, b->id.idf1, b->ospa, b->scansPerSecond(r.scans));
   }
   return 0;
 }

@@ -1,6 +1,6 @@
 // Tracker benchmark: walkers replay recorded trajectories in a generated scene (legs with gait, laser noise),
 // a static or moving robot scans them, and the tracker output is scored with CLEAR MOT against the people that
-// are within sensor range and line of sight. A baseline tracker runs on the same detections in the same run.
+// are within sensor range and line of sight (also with HOTA, IDF1 and OSPA, track_metrics.hpp). A baseline tracker runs on the same detections in the same run.
 #pragma once
 
 #include <cstdint>
@@ -11,6 +11,7 @@
 #include "cairn/people_tracking/clear_mot.hpp"
 #include "cairn/people_tracking/scene.hpp"
 #include "cairn/people_tracking/tracker.hpp"
+#include "cairn/people_tracking/track_metrics.hpp"
 
 namespace cairn::people_tracking {
 
@@ -74,6 +75,9 @@ struct BenchParams {
 
 struct BenchRun {
   MotMetrics mot;
+  HotaMetrics hota;   // similarity reaches 0 at 2 x match_threshold (alpha 0.5 = the CLEAR MOT threshold)
+  IdF1::Result id;    // match_threshold
+  double ospa = 0.0;  // mean OSPA, m (cut-off 2 x match_threshold, order 1)
   double process_seconds = 0.0;  // detection + tracking CPU time (wall clock of the processing only)
   [[nodiscard]] double scansPerSecond(std::size_t scans) const {
     return process_seconds > 0 ? double(scans) / process_seconds : 0.0;

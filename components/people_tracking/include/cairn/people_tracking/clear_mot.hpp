@@ -29,6 +29,13 @@ struct MotCorrespondence {
   int gt = 0, hyp = 0, switched_from = -1;
 };
 
+// MOTChallenge's distractor preprocessing, shared by the scorers: hypotheses and all objects, counted (gt) or not
+// (dont_care), are matched optimally (Hungarian on distances within threshold); the hypotheses matched to a
+// don't-care object are removed. Returns the kept hypotheses; *ignored (if given) counts the removed ones.
+std::vector<MotObject> dropDontCareHypotheses(const std::vector<MotObject>& gt, const std::vector<MotObject>& hyp,
+                                              const std::vector<Eigen::Vector2d>& dont_care, double threshold,
+                                              std::size_t* ignored = nullptr);
+
 class ClearMot {
  public:
   explicit ClearMot(double threshold = 0.5) : threshold_(threshold) {}
