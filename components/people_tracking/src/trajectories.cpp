@@ -4,7 +4,6 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
-#include <regex>
 #include <sstream>
 
 #include "cairn/people_tracking/scan.hpp"
@@ -97,16 +96,28 @@ TrajectorySet loadTrajectories(const std::string& path) {
     s.format = "edinburgh";
     s.max_gap = 1.0;
     constexpr double kMetresPerPixel = 0.0247, kFps = 9.0;
-    const std::regex head(R"(TRACK\.R(\d+)\s*=\s*\[(.*)\];?\s*$)");
     while (std::getline(lines, line)) {
       ++ln;
       const auto pos = line.find("TRACK.");
       if (pos == std::string::npos) continue;
-      std::smatch m;
-      const std::string sub = line.substr(pos);
-      if (!std::regex_search(sub, m, head)) bad(path, ln, "malformed TRACK entry");
-      const int id = std::stoi(m[1]);
-      std::string body = m[2];
+      // TRACK.R<id> = [[x y t];[x y t];...]; — parsed by hand: a regex over a whole track (one line of up to
+      // 82 kB in tracks.01Aug.txt) recursed once per character in libstdc++ and overflowed the stack.
+      std::size_t i = pos + 6;
+      if (line.compare(i, 1, "R") != 0) bad(path, ln, "malformed TRACK entry (expected TRACK.R<id>)");
+      const std::size_t digits = line.find_first_not_of("0123456789", ++i);
+      if (digits == i || digits == std::string::npos || digits - i > 9) bad(path, ln, "malformed TRACK entry (bad id)");
+      const int id = std::stoi(line.substr(i, digits - i));
+      i = line.find_first_not_of(" \t", digits);
+      if (i == std::string::npos || line[i] != '=') bad(path, ln, "malformed TRACK entry (expected '=')");
+      i = line.find_first_not_of(" \t", i + 1);
+      const std::size_t close = line.find_last_of(']');
+      if (i == std::string::npos || line[i] != '[' || close == std::string::npos || close <= i ||
+          line.find_first_not_of(" \t\r;", close + 1) != std::string::npos)
+        bad(path, ln, "malformed TRACK entry (expected [...])");
+      if (std::count(line.begin() + static_cast<long>(i), line.begin() + static_cast<long>(close) + 1, '[') !=
+          std::count(line.begin() + static_cast<long>(i), line.begin() + static_cast<long>(close) + 1, ']'))
+        bad(path, ln, "malformed TRACK entry (unbalanced brackets)");
+      std::string body = line.substr(i + 1, close - i - 1);
       std::replace_if(body.begin(), body.end(), [](char c) { return c == '[' || c == ']' || c == ';'; }, ' ');
       std::istringstream nums(body);
       double x, y, t;

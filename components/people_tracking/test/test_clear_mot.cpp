@@ -116,6 +116,34 @@ TEST(Trajectories, LoadsEdinburghTracks) {
   EXPECT_NEAR(r1.front().t, 4471 / 9.0, 1e-12);
 }
 
+TEST(Trajectories, LoadsLongEdinburghTracksAndRejectsMalformedEntries) {
+  // The shipped tracks.01Aug.txt has a track of 82 kB on one line; a regex-based parser overflowed the stack on it
+  // (segfault). 20 000 points here, then malformed entries: each one line naming file:line, no crash.
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string path = (dir / ("cairn_pt_edinburgh_" + std::to_string(::getpid()) + ".txt")).string();
+  {
+    std::ofstream f(path);
+    f << "% Total number of trajectories in file are  1\n\nProperties.R3=[20000 0 19999];\n TRACK.R3=[";
+    for (int k = 0; k < 20000; ++k) f << (k ? ";" : "") << "[" << 100 + k % 50 << " " << 200 << " " << k << "]";
+    f << "];\n";
+  }
+  const TrajectorySet s = loadTrajectories(path);
+  EXPECT_EQ(s.format, "edinburgh");
+  ASSERT_EQ(s.people.at(3).size(), 20000u);
+  EXPECT_NEAR(s.people.at(3).back().t, 19999 / 9.0, 1e-9);
+  for (const std::string bad : {"TRACK.Rx=[[1 2 3]];", "TRACK.R4 [[1 2 3]];", "TRACK.R4=[[1 2 3];", "TRACK.R4=[[1 2 3]]; junk",
+                                 "TRACK.R4=[[1 2 abc]];", "TRACK.R99999999999=[[1 2 3]];"}) {
+    std::ofstream(path) << "TRACK.R1=[[1 2 3];[2 2 4]];\n" << bad << "\n";
+    try {
+      (void)loadTrajectories(path);
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(path + ":2: "), std::string::npos) << e.what();
+    }
+  }
+  std::filesystem::remove(path);
+}
+
 TEST(Trajectories, LoadsCsvAndRejectsBadInput) {
   const auto dir = std::filesystem::temp_directory_path();
   const std::string csv = (dir / ("cairn_pt_traj_" + std::to_string(::getpid()) + ".csv")).string();
