@@ -195,3 +195,31 @@ TEST(Cli, BadOptionValuesAreOneLineErrorsBeforeAnythingStarts) {
     EXPECT_EQ(r.output, err + "\n") << args;
   }
 }
+
+// `cairn bench ipc` runtime cases (numbers in docs/benchmarks.md; no timing is asserted here): every message the
+// dispatch case sends arrives, the idle case's timer fires, a component loads and unloads, and a killed container
+// is respawned and publishes again.
+TEST(BenchIpc, RuntimeCasesRunAndLoseNothing) {
+  auto field = [](const std::string& out, const std::string& key) {
+    const auto p = out.find("\"" + key + "\":");
+    return p == std::string::npos ? -1.0 : std::atof(out.c_str() + p + key.size() + 3);
+  };
+  auto r = run(kCairn + " bench ipc --quick --only dispatch 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_GT(field(r.output, "sent"), 10000) << r.output;
+  EXPECT_EQ(field(r.output, "callbacks"), field(r.output, "sent")) << r.output;
+  EXPECT_EQ(field(r.output, "baseline_callbacks"), field(r.output, "baseline_sent")) << r.output;
+  r = run(kCairn + " bench ipc --quick --only idle 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_GE(field(r.output, "timer_expiries"), 15) << r.output;
+  EXPECT_GE(field(r.output, "wakeups"), 0) << r.output;
+  r = run(kCairn + " bench ipc --quick --only component_load 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("\"error\""), std::string::npos) << r.output;
+  EXPECT_EQ(field(r.output, "loads"), 20) << r.output;
+  r = run(kCairn + " bench ipc --quick --only respawn 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("\"error\""), std::string::npos) << r.output;
+  EXPECT_EQ(field(r.output, "kills"), 3) << r.output;
+  EXPECT_GT(field(r.output, "serving_again_p50_ms"), 0) << r.output;
+}

@@ -11,8 +11,25 @@
 //   dds_throughput 1 KiB reliable keep-all flood to another process, with write batching as ddsperf's pub
 //                 (and dds_throughput_unbatched: one datagram per sample); baseline: ddsperf pub/sub.
 // Latencies are one-way: half the round trip for dds_rtt, as ddsperf prints them.
+// Runtime costs (the anchors' executor and container targets, docs/design/anchors):
+//   dispatch      100 registered entities (90 subscriptions, 10 timers), a thread publishing 10 000 msg/s to
+//                 them: the executor thread's CPU time per callback and share of a core; baseline: a bare
+//                 mutex + condition-variable queue consumer fed the same way, same run.
+//   idle          the same 100 entities with nothing due: the executor thread's wake-ups (voluntary context
+//                 switches) in 2 s, and with one 10 Hz timer added (one wake-up per expiry is the floor).
+//   component_load load + unload of cairn_demo::Talker in a ComponentManager, as `cairn component load` (with the
+//                 container's dry-run construction) and as `cairn launch` loads (parameters validated); the first
+//                 load includes dlopen; baseline: constructing an equivalent node (publisher + timer) directly.
+//   respawn       `cairn launch` of a container publishing at 100 Hz, its process killed with SIGKILL: time from
+//                 the kill to the respawned component's first message; baseline: the same launch's cold start.
+#include <pthread.h>
+#include <signal.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 
 #include <algorithm>
 #include <atomic>
@@ -20,6 +37,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
+#include <functional>
 #include <iostream>
 #include <mutex>
 #include <new>
@@ -27,9 +46,11 @@
 #include <thread>
 
 #include "../test/alloc_counter.hpp"
+#include "cairn/container.hpp"
 #include "cairn/node.hpp"
 #include "cairn/process.hpp"
 #include "sensor_msgs/msg/Image.hpp"
+#include "std_msgs/msg/String.hpp"
 
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
@@ -206,6 +227,311 @@ void cross_thread(int iters) {
       "\"baseline\":\"std::condition_variable hand-off\",\"baseline_p50_ns\":%.0f,\"baseline_p99_ns\":%.0f,"
       "\"ratio_p50\":%.2f,\"goal\":\"ratio_p50<=1.2\"}\n",
       s.p50, s.p99, s.max, b.p50, b.p99, b.p50 > 0 ? s.p50 / b.p50 : 0.0);
+  std::fflush(stdout);
+}
+
+// ---------------- executor dispatch and idle wake-ups ----------------
+double thread_cpu_ns(std::thread& t) {
+  clockid_t id;
+  timespec ts{};
+  if (pthread_getcpuclockid(t.native_handle(), &id) != 0 || clock_gettime(id, &ts) != 0) return 0.0;
+  return double(ts.tv_sec) * 1e9 + double(ts.tv_nsec);
+}
+
+// Voluntary context switches of thread `tid` so far (/proc): each one is the thread going to sleep, i.e. a wake-up.
+long voluntary_switches(pid_t tid) {
+  std::ifstream f("/proc/self/task/" + std::to_string(tid) + "/status");
+  std::string key;
+  long v = -1;
+  while (f >> key) {
+    if (key == "voluntary_ctxt_switches:") {
+      f >> v;
+      break;
+    }
+  }
+  return v;
+}
+
+constexpr int kDispatchTopics = 90, kDispatchTimers = 10;
+
+// The dispatch and idle cases' timers: registered, never due.
+std::vector<std::shared_ptr<cairn::TimerBase>> hourly_timers(cairn::Node& node) {
+  std::vector<std::shared_ptr<cairn::TimerBase>> timers;
+  for (int i = 0; i < kDispatchTimers; ++i) timers.push_back(node.create_wall_timer(std::chrono::hours(1), [] {}));
+  return timers;
+}
+
+// Spins `exec` on a new thread; `tid` gets its kernel thread id (for voluntary_switches).
+std::thread spin_thread(cairn::Executor& exec, std::atomic<pid_t>& tid) {
+  return std::thread([&exec, &tid] {
+    tid = static_cast<pid_t>(syscall(SYS_gettid));
+    exec.spin();
+  });
+}
+
+// Publishes `rate` messages per second round robin to `publish(i)`, from now for `seconds`; returns the count.
+long paced_feed(double rate, double seconds, const std::function<void(int)>& publish) {
+  const auto step = std::chrono::nanoseconds(static_cast<long>(1e9 / rate));
+  const auto start = Clock::now();
+  const auto end = start + std::chrono::nanoseconds(static_cast<long>(seconds * 1e9));
+  long n = 0;
+  for (auto next = start; next < end; next += step) {
+    std::this_thread::sleep_until(next);
+    publish(static_cast<int>(n++ % kDispatchTopics));
+  }
+  return n;
+}
+
+void dispatch(double seconds, double rate) {
+  cairn::Executor exec;
+  cairn::Node node(opts("bench_dispatch", exec));
+  std::vector<std::shared_ptr<cairn::Publisher<Image>>> pubs;
+  std::vector<std::shared_ptr<cairn::Subscription<Image>>> subs;
+  std::atomic<long> calls{0};
+  for (int i = 0; i < kDispatchTopics; ++i) {
+    const std::string topic = "bench/dispatch_" + std::to_string(i);
+    pubs.push_back(node.create_publisher<Image>(topic));
+    subs.push_back(node.create_subscription<Image>(topic, cairn::QoS{}, [&](std::unique_ptr<Image>) {
+      calls.fetch_add(1, std::memory_order_relaxed);
+    }));
+  }
+  std::vector<std::shared_ptr<cairn::TimerBase>> timers = hourly_timers(node);
+  std::atomic<pid_t> tid{0};
+  std::thread spinner = spin_thread(exec, tid);
+  auto publish = [&](int i) { pubs[static_cast<std::size_t>(i)]->publish(std::make_unique<Image>()); };
+  paced_feed(rate, 0.3, publish);  // warm-up
+  std::this_thread::sleep_for(20ms);
+  const long c0 = calls, v0 = voluntary_switches(tid);
+  const double cpu0 = thread_cpu_ns(spinner);
+  const auto w0 = Clock::now();
+  const long sent = paced_feed(rate, seconds, publish);
+  std::this_thread::sleep_for(20ms);
+  const double cpu = thread_cpu_ns(spinner) - cpu0, wall = ns_since(w0);
+  const long got = calls - c0, wakeups = voluntary_switches(tid) - v0;
+  exec.cancel();
+  spinner.join();
+
+  // Baseline: a consumer thread popping unique_ptrs from a mutex-guarded deque (condition-variable wake-up) and
+  // calling one of 90 std::function handlers; fed by the same pacing.
+  std::mutex mu;
+  std::condition_variable cv;
+  std::deque<std::pair<int, std::unique_ptr<Image>>> q;
+  bool stop = false;
+  long bcalls = 0;
+  std::vector<std::function<void(std::unique_ptr<Image>)>> handlers(kDispatchTopics, [&](std::unique_ptr<Image>) { ++bcalls; });
+  std::atomic<pid_t> btid{0};
+  std::thread consumer([&] {
+    btid = static_cast<pid_t>(syscall(SYS_gettid));
+    std::unique_lock l(mu);
+    for (;;) {
+      cv.wait(l, [&] { return !q.empty() || stop; });
+      if (q.empty()) return;
+      auto item = std::move(q.front());
+      q.pop_front();
+      l.unlock();
+      handlers[static_cast<std::size_t>(item.first)](std::move(item.second));
+      l.lock();
+    }
+  });
+  auto bpublish = [&](int i) {
+    auto m = std::make_unique<Image>();
+    {
+      std::lock_guard l(mu);
+      q.emplace_back(i, std::move(m));
+    }
+    cv.notify_one();
+  };
+  paced_feed(rate, 0.3, bpublish);
+  std::this_thread::sleep_for(20ms);
+  const double bcpu0 = thread_cpu_ns(consumer);
+  const long bv0 = voluntary_switches(btid);
+  long bc0;
+  {
+    std::lock_guard l(mu);
+    bc0 = bcalls;
+  }
+  const long bsent = paced_feed(rate, seconds, bpublish);
+  std::this_thread::sleep_for(20ms);
+  const double bcpu = thread_cpu_ns(consumer) - bcpu0;
+  const long bwakeups = voluntary_switches(btid) - bv0;
+  long bgot;
+  {
+    std::lock_guard l(mu);
+    bgot = bcalls - bc0;
+    stop = true;
+  }
+  cv.notify_one();
+  consumer.join();
+  std::printf(
+      "{\"case\":\"dispatch\",\"entities\":%d,\"rate_hz\":%.0f,\"sent\":%ld,\"callbacks\":%ld,"
+      "\"cpu_per_callback_ns\":%.0f,\"core_percent\":%.2f,\"wakeups_per_callback\":%.2f,"
+      "\"baseline\":\"mutex+condvar queue consumer\",\"baseline_sent\":%ld,\"baseline_callbacks\":%ld,"
+      "\"baseline_cpu_per_msg_ns\":%.0f,\"baseline_wakeups_per_msg\":%.2f,\"ratio\":%.2f,\"goal\":\"<=1000 ns CPU per callback, <5%% of a core\"}\n",
+      kDispatchTopics + kDispatchTimers, rate, sent, got, got ? cpu / double(got) : 0.0, 100.0 * cpu / wall,
+      got ? double(wakeups) / double(got) : 0.0, bsent, bgot, bgot ? bcpu / double(bgot) : 0.0, bgot ? double(bwakeups) / double(bgot) : 0.0,
+      bgot && got && bcpu > 0 ? (cpu / double(got)) / (bcpu / double(bgot)) : 0.0);
+  std::fflush(stdout);
+}
+
+void idle(double seconds) {
+  cairn::Executor exec;
+  cairn::Node node(opts("bench_idle", exec));
+  std::vector<std::shared_ptr<cairn::Subscription<Image>>> subs;
+  for (int i = 0; i < kDispatchTopics; ++i)
+    subs.push_back(node.create_subscription<Image>("bench/idle_" + std::to_string(i), cairn::QoS{}, [](std::unique_ptr<Image>) {}));
+  std::vector<std::shared_ptr<cairn::TimerBase>> timers = hourly_timers(node);
+  std::atomic<pid_t> tid{0};
+  std::thread spinner = spin_thread(exec, tid);
+  std::this_thread::sleep_for(300ms);  // settle (DDS readers, discovery run on Cyclone's threads)
+  long v0 = voluntary_switches(tid);
+  std::this_thread::sleep_for(std::chrono::milliseconds(static_cast<long>(seconds * 1000)));
+  const long idle_wakeups = voluntary_switches(tid) - v0;
+  std::atomic<long> expiries{0};
+  timers.push_back(node.create_wall_timer(100ms, [&] { ++expiries; }));
+  std::this_thread::sleep_for(150ms);
+  v0 = voluntary_switches(tid);
+  const long e0 = expiries;
+  std::this_thread::sleep_for(std::chrono::milliseconds(static_cast<long>(seconds * 1000)));
+  const long timer_wakeups = voluntary_switches(tid) - v0, fired = expiries - e0;
+  exec.cancel();
+  spinner.join();
+  std::printf(
+      "{\"case\":\"idle\",\"entities\":%d,\"seconds\":%.1f,\"wakeups\":%ld,\"timer_10hz_wakeups\":%ld,"
+      "\"timer_expiries\":%ld,\"goal\":\"0 wake-ups when nothing is due, one per timer expiry\"}\n",
+      kDispatchTopics + kDispatchTimers, seconds, idle_wakeups, timer_wakeups, fired);
+  std::fflush(stdout);
+}
+
+// ---------------- component load ----------------
+void component_load(int iters) {
+  auto ctx = cairn::Context::create();
+  cairn::Executor exec;
+  cairn::ComponentLoader loader;
+  cairn::ComponentManager mgr(ctx, exec, "bench_container", loader);
+  auto timed_load = [&](bool validated, double& ns) {
+    cairn::LoadRequest r{"cairn_demo::Talker", "bench_talker"};
+    r.parameters_validated = validated;
+    const auto t0 = Clock::now();
+    const cairn::LoadResult res = mgr.load(r);
+    ns = ns_since(t0);
+    if (!res.ok) throw std::runtime_error("load cairn_demo::Talker: " + res.error);
+    if (auto err = mgr.unload(res.unique_id)) throw std::runtime_error("unload: " + *err);
+  };
+  double first = 0.0;
+  try {
+    timed_load(false, first);
+  } catch (const std::exception& e) {
+    std::printf("{\"case\":\"component_load\",\"error\":\"%s\"}\n", e.what());
+    return;
+  }
+  std::vector<double> dry, validated, direct;
+  for (int i = 0; i < iters; ++i) {
+    double ns = 0.0;
+    timed_load(false, ns);
+    dry.push_back(ns);
+    timed_load(true, ns);
+    validated.push_back(ns);
+    // Baseline: the node the component is (a publisher and a timer), constructed directly.
+    const auto t0 = Clock::now();
+    {
+      cairn::Node n(cairn::NodeOptions("bench_direct", &exec));
+      auto pub = n.create_publisher<std_msgs::msg::String>("chatter");
+      auto tm = n.create_wall_timer(100ms, [] {});
+      direct.push_back(ns_since(t0));
+    }
+  }
+  const Stats d = stats(dry), v = stats(validated), b = stats(direct);
+  std::printf(
+      "{\"case\":\"component_load\",\"class\":\"cairn_demo::Talker\",\"first_load_ms\":%.2f,\"loads\":%d,"
+      "\"p50_ms\":%.3f,\"p99_ms\":%.3f,\"max_ms\":%.3f,\"validated_p50_ms\":%.3f,\"validated_p99_ms\":%.3f,"
+      "\"baseline\":\"constructing the equivalent node directly\",\"baseline_p50_ms\":%.3f,\"ratio_validated_p50\":%.2f,"
+      "\"goal\":\"p99<=50ms\"}\n",
+      first / 1e6, iters, d.p50 / 1e6, d.p99 / 1e6, d.max / 1e6, v.p50 / 1e6, v.p99 / 1e6, b.p50 / 1e6,
+      b.p50 > 0 ? v.p50 / b.p50 : 0.0);
+  std::fflush(stdout);
+}
+
+// ---------------- crash -> serving again ----------------
+// Children of `parent` whose command line contains `needle`.
+std::vector<pid_t> children_with(pid_t parent, const std::string& needle) {
+  std::vector<pid_t> out;
+  for (const auto& e : std::filesystem::directory_iterator("/proc")) {
+    const std::string name = e.path().filename();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream st(e.path() / "stat");
+    std::string line;
+    if (!std::getline(st, line)) continue;
+    const auto close = line.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(line.substr(close + 2));
+    char state;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    if (ppid != parent) continue;
+    std::ifstream cl(e.path() / "cmdline");
+    std::string cmd((std::istreambuf_iterator<char>(cl)), std::istreambuf_iterator<char>());
+    std::replace(cmd.begin(), cmd.end(), '\0', ' ');
+    if (cmd.find(needle) != std::string::npos) out.push_back(static_cast<pid_t>(std::stol(name)));
+  }
+  return out;
+}
+
+void respawn(const std::string& self, int kills) {
+  const std::string cairn_exe = (std::filesystem::path(self).parent_path() / "cairn").string();
+  const std::string spec = (std::filesystem::temp_directory_path() / ("cairn_bench_respawn_" + std::to_string(getpid()) + ".yaml")).string();
+  std::ofstream(spec) << "containers:\n  - name: bench_respawn\n    respawn: true\n    respawn_delay: 0.1\n"
+                         "    components:\n      - class: cairn_demo::Talker\n        name: bench_talker\n"
+                         "        remap: {chatter: bench/respawn_chatter}\n        params: {rate_hz: 100.0}\n";
+  cairn::Executor exec;
+  cairn::Node node(opts("bench_respawn_watch", exec));
+  long last = 0;       // counter of the last message ("hello world: N")
+  bool restarted = false;
+  long received = 0;
+  auto sub = node.create_subscription<std_msgs::msg::String>("bench/respawn_chatter", cairn::QoS{}, [&](const std_msgs::msg::String& m) {
+    const auto colon = m.data.rfind(": ");
+    const long n = colon == std::string::npos ? 0 : std::atol(m.data.c_str() + colon + 2);
+    if (n < last) restarted = true;
+    last = n;
+    ++received;
+  });
+  std::vector<double> cold, again;
+  for (int k = 0; k < kills; ++k) {
+    last = 0;
+    received = 0;
+    restarted = false;
+    const auto t0 = Clock::now();
+    const pid_t launch = cairn::spawn_process({"/bin/sh", "-c", "exec " + cairn_exe + " launch " + spec + " > /dev/null 2>&1"});
+    if (!exec.spin_until([&] { return received > 0; }, 20s)) {
+      std::printf("{\"case\":\"respawn\",\"error\":\"no message from the launched container within 20 s\"}\n");
+      kill(launch, SIGTERM);
+      waitpid(launch, nullptr, 0);
+      break;
+    }
+    cold.push_back(ns_since(t0));
+    exec.spin_until([&] { return last >= 50; }, 5s);  // running steadily
+    std::vector<pid_t> c;
+    for (int tries = 0; tries < 50 && c.empty(); ++tries) c = children_with(launch, "bench_respawn");
+    if (c.size() != 1) {
+      std::printf("{\"case\":\"respawn\",\"error\":\"found %zu container processes\"}\n", c.size());
+      kill(launch, SIGTERM);
+      waitpid(launch, nullptr, 0);
+      break;
+    }
+    const auto t1 = Clock::now();
+    kill(c[0], SIGKILL);
+    if (exec.spin_until([&] { return restarted; }, 20s)) again.push_back(ns_since(t1));
+    kill(launch, SIGTERM);
+    waitpid(launch, nullptr, 0);
+    exec.spin_for(200ms);
+  }
+  std::filesystem::remove(spec);
+  if (again.empty()) return;
+  const Stats a = stats(again), c = stats(cold);
+  std::printf(
+      "{\"case\":\"respawn\",\"kills\":%zu,\"serving_again_p50_ms\":%.0f,\"serving_again_max_ms\":%.0f,"
+      "\"respawn_delay_ms\":100,\"baseline\":\"cold start of the same launch\",\"baseline_p50_ms\":%.0f,"
+      "\"ratio_p50\":%.2f,\"goal\":\"<=2000ms\"}\n",
+      a.n, a.p50 / 1e6, a.max / 1e6, c.p50 / 1e6, c.p50 > 0 ? a.p50 / c.p50 : 0.0);
   std::fflush(stdout);
 }
 
@@ -477,7 +803,8 @@ int main(int argc, char** argv) {
   if (mode == "pong") return pong_main(argc > 2 && std::string(argv[2]) == "immediate");
   if (mode == "sink") return sink_main(argc > 2 ? std::atof(argv[2]) : 5.0);
   if (mode != "ipc") {
-    std::cerr << "usage: cairn bench ipc [--quick] [--only same_thread|cross_thread|dds_rtt|dds_throughput]\n";
+    std::cerr << "usage: cairn bench ipc [--quick] [--only same_thread|cross_thread|dds_rtt|dds_throughput|dispatch|idle|"
+                 "component_load|respawn]\n";
     return 2;
   }
   bool quick = false;
@@ -516,5 +843,9 @@ int main(int argc, char** argv) {
     dds_throughput(self, 1024, secs, true);
     dds_throughput(self, 1024, secs, false);
   }
+  if (want("dispatch")) dispatch(secs, 10000.0);
+  if (want("idle")) idle(2.0);
+  if (want("component_load")) component_load(quick ? 20 : 100);
+  if (want("respawn")) respawn(self, quick ? 3 : 5);
   return 0;
 }

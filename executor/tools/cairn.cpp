@@ -53,7 +53,10 @@ Runtime (graph discovered through DDS built-in topics; non-cairn DDS participant
   launch <spec.yaml> [--duration S] [--check]
                                        validate the whole spec, then start and supervise it
   container --name N [--threads K]     a component container process (K in 1-64, as in launch specs)
-  bench ipc [--quick]                  intra-process and DDS latency/throughput vs baselines (JSON lines)
+  bench ipc [--quick] [--only CASE]    intra-process and DDS latency/throughput, executor dispatch CPU and idle
+                                       wake-ups, component load time, crash-to-serving time, each vs a baseline
+                                       (JSON lines; CASE: same_thread cross_thread dds_rtt dds_throughput
+                                       dispatch idle component_load respawn)
 
 Component tools (run as cairn-<verb>):
   slam optimize <in.g2o> ...           pose-graph optimization (components/graph_slam)
