@@ -210,7 +210,7 @@ bool Executor::can_run_inline(const CallbackGroup* g) const {
 
 namespace {
 // A clock's now() once per pass over the timers (they mostly share one clock): every executed item passes over all
-// timers twice, and a clock read per timer was most of the executor's own user time with 10 timers.
+// timers twice, and with 10 timers a clock read per timer was the largest user-space cost in `perf`.
 struct ClockReads {
   const Clock* clock = nullptr;
   int64_t ns = 0;
