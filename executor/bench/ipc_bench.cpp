@@ -291,7 +291,8 @@ void dispatch(double seconds, double rate) {
   for (int i = 0; i < kDispatchTopics; ++i) {
     const std::string topic = "bench/dispatch_" + std::to_string(i);
     pubs.push_back(node.create_publisher<Image>(topic));
-    subs.push_back(node.create_subscription<Image>(topic, cairn::QoS{}, [&](std::unique_ptr<Image>) {
+    // keep-all like the baseline's unbounded queue: a stalled executor delays messages but drops none
+    subs.push_back(node.create_subscription<Image>(topic, cairn::QoS{}.keep_all(), [&](std::unique_ptr<Image>) {
       calls.fetch_add(1, std::memory_order_relaxed);
     }));
   }
@@ -305,7 +306,7 @@ void dispatch(double seconds, double rate) {
   const double cpu0 = thread_cpu_ns(spinner);
   const auto w0 = Clock::now();
   const long sent = paced_feed(rate, seconds, publish);
-  std::this_thread::sleep_for(20ms);
+  for (int i = 0; i < 500 && calls - c0 < sent; ++i) std::this_thread::sleep_for(10ms);  // drained (5 s at most)
   const double cpu = thread_cpu_ns(spinner) - cpu0, wall = ns_since(w0);
   const long got = calls - c0, wakeups = voluntary_switches(tid) - v0;
   exec.cancel();
@@ -351,7 +352,11 @@ void dispatch(double seconds, double rate) {
     bc0 = bcalls;
   }
   const long bsent = paced_feed(rate, seconds, bpublish);
-  std::this_thread::sleep_for(20ms);
+  for (int i = 0; i < 500; ++i) {  // drained (5 s at most)
+    std::this_thread::sleep_for(10ms);
+    std::lock_guard l(mu);
+    if (q.empty()) break;
+  }
   const double bcpu = thread_cpu_ns(consumer) - bcpu0;
   const long bwakeups = voluntary_switches(btid) - bv0;
   long bgot;
