@@ -222,4 +222,7 @@ TEST(BenchIpc, RuntimeCasesRunAndLoseNothing) {
   EXPECT_EQ(r.output.find("\"error\""), std::string::npos) << r.output;
   EXPECT_EQ(field(r.output, "kills"), 3) << r.output;
   EXPECT_GT(field(r.output, "serving_again_p50_ms"), 0) << r.output;
+  r = run(kCairn + " bench ipc --only bogus 2>&1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(r.output, "cairn: bench: --only: unknown case 'bogus'\n");
 }

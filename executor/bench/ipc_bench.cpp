@@ -825,6 +825,12 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  static const std::vector<std::string> kCases = {"same_thread", "cross_thread", "dds_rtt", "dds_throughput",
+                                                 "dispatch", "idle", "component_load", "respawn"};
+  if (!only.empty() && std::find(kCases.begin(), kCases.end(), only) == kCases.end()) {
+    std::cerr << "cairn: bench: --only: unknown case '" << only << "'\n";
+    return 2;
+  }
   if (!std::getenv("CYCLONEDDS_URI")) {
     std::cerr << "cairn: bench: set CYCLONEDDS_URI first (source scripts/env.sh: loopback only)\n";
     return 2;

@@ -7,7 +7,8 @@ independent Python one agree on the same run.
 1. `cairn people bench --dump` on a trajectory excerpt, static robot and circling robot: every CLEAR MOT, HOTA,
    IDF1 and OSPA figure of the bench's JSON equals score_dump.py's from the dumped CSV files (counts exactly,
    ratios to the JSON's 4 decimals).
-2. A dump without dontcare.csv: one line naming the directory, exit 2.
+2. A dump without dontcare.csv: one line naming the directory, exit 2; a non-numeric row: one line naming
+   file:line, exit 2.
 """
 import json
 import os
@@ -51,6 +52,13 @@ def main():
         lines = r.stderr.strip().splitlines()
         if r.returncode != 2 or len(lines) != 1 or "static" not in lines[0] or "dontcare.csv" not in lines[0]:
             print(f"FAIL: missing dontcare.csv gave exit {r.returncode}, stderr {r.stderr!r}")
+            failures += 1
+        with open(os.path.join(tmp, "circle", "tracks.csv"), "a") as f:
+            f.write("1.0,7,abc,2.0\n")
+        r = subprocess.run([sys.executable, TOOL, os.path.join(tmp, "circle")], capture_output=True, text=True)
+        lines = r.stderr.strip().splitlines()
+        if r.returncode != 2 or len(lines) != 1 or "tracks.csv:" not in lines[0]:
+            print(f"FAIL: a non-numeric row gave exit {r.returncode}, stderr {r.stderr!r}")
             failures += 1
     print("FAILED" if failures else "PASSED")
     return 1 if failures else 0

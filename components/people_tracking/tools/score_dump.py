@@ -87,13 +87,16 @@ def dist(a, b):
 
 def load(d):
     frames = collections.defaultdict(lambda: ([], [], []))  # t -> (gt, hyp, dont_care)
-    for name, slot in (("groundtruth.csv", 0), ("tracks.csv", 1)):
-        with open(f"{d}/{name}") as f:
-            for r in csv.DictReader(f):
-                frames[r["t"]][slot].append((int(r["id"]), (float(r["x"]), float(r["y"]))))
-    with open(f"{d}/dontcare.csv") as f:
-        for r in csv.DictReader(f):
-            frames[r["t"]][2].append((float(r["x"]), float(r["y"])))
+    for name, slot in (("groundtruth.csv", 0), ("tracks.csv", 1), ("dontcare.csv", 2)):
+        path = f"{d}/{name}"
+        with open(path) as f:
+            for line, r in enumerate(csv.DictReader(f), start=2):
+                try:
+                    p = (float(r["x"]), float(r["y"]))
+                    float(r["t"])
+                    frames[r["t"]][slot].append(p if slot == 2 else (int(r["id"]), p))
+                except (KeyError, TypeError, ValueError) as e:
+                    raise ValueError(f"{path}:{line}: expected {'t,x,y' if slot == 2 else 't,id,x,y'} ({e})") from None
     return [frames[t] for t in sorted(frames, key=float)]
 
 
@@ -263,8 +266,11 @@ def main():
     a = ap.parse_args()
     try:
         s = score(a.dir, a.threshold)
-    except (OSError, KeyError, ValueError) as e:
+    except OSError as e:
         print(f"score_dump.py: {a.dir}: {e}", file=sys.stderr)
+        return 2
+    except ValueError as e:
+        print(f"score_dump.py: {e}", file=sys.stderr)
         return 2
     if a.json:
         print(json.dumps(s))
