@@ -11,7 +11,7 @@
 //   dds_throughput 1 KiB reliable keep-all flood to another process, with write batching as ddsperf's pub
 //                 (and dds_throughput_unbatched: one datagram per sample); baseline: ddsperf pub/sub.
 // Latencies are one-way: half the round trip for dds_rtt, as ddsperf prints them.
-// Runtime costs (the anchors' executor and container targets, docs/design/anchors):
+// Runtime costs (the anchors' executor and container targets, ../shared/design/anchors/middleware-and-behavior-trees.md):
 //   dispatch      100 registered entities (90 subscriptions, 10 timers), a thread publishing 10 000 msg/s to
 //                 them: the executor thread's CPU time per callback and share of a core; baseline: a bare
 //                 mutex + condition-variable queue consumer fed the same way, same run.
@@ -28,9 +28,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <filesystem>
-#include <fstream>
-
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
@@ -38,6 +35,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <iostream>
 #include <mutex>
