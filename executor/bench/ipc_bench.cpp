@@ -11,6 +11,9 @@
 //   dds_throughput 1 KiB reliable keep-all flood to another process, with write batching as ddsperf's pub
 //                 (and dds_throughput_unbatched: one datagram per sample); baseline: ddsperf pub/sub.
 // Latencies are one-way: half the round trip for dds_rtt, as ddsperf prints them.
+//   mixed         1 KiB to a local const& subscriber, inline (publisher's executor thread) or queued (another
+//                 executor's thread), with and without a subscriber in another process on the topic: the local
+//                 latency; baseline: the same without the remote one.
 // Runtime costs (the anchors' executor and container targets, ../shared/design/anchors/middleware-and-behavior-trees.md):
 //   dispatch      100 registered entities (90 subscriptions, 10 timers), a thread publishing 10 000 msg/s to
 //                 them: the executor thread's CPU time per callback and share of a core; baseline: a bare
@@ -43,6 +46,7 @@
 #include <new>
 #include <sstream>
 #include <thread>
+#include <tuple>
 
 #include "../test/alloc_counter.hpp"
 #include "cairn/container.hpp"
@@ -539,6 +543,67 @@ void respawn(const std::string& self, int kills) {
   std::fflush(stdout);
 }
 
+// ---------------- mixed: local latency with a remote subscriber on the topic ----------------
+// The local subscriber (const&, sharing) on the publisher's own executor thread (inline: its callback runs in
+// publish()) or on another executor's thread (queued); latency = publish() call to callback entry.
+void mixed(const std::string& self, int iters) {
+  cairn::Executor exec, other;
+  cairn::Node node(opts("bench_mixed", exec));
+  cairn::Node node_other(opts("bench_mixed_other", other));
+  auto pub = node.create_publisher<Image>("bench/flood");  // the sink process subscribes to this topic
+  std::atomic<int64_t> t0_ns{0};
+  std::mutex mu;
+  std::vector<double> lat;
+  lat.reserve(static_cast<std::size_t>(iters));
+  auto record = [&](const Image&) {
+    const double d = double(Clock::now().time_since_epoch().count() - t0_ns.load());
+    std::lock_guard l(mu);
+    lat.push_back(d);
+  };
+  std::thread other_thread([&] { other.spin(); });
+  auto measure = [&](bool inline_sub) {
+    auto sub = inline_sub ? node.create_subscription<Image>("bench/flood", cairn::QoS{}.keep_all(), record)
+                          : node_other.create_subscription<Image>("bench/flood", cairn::QoS{}.keep_all(), record);
+    {
+      std::lock_guard l(mu);
+      lat.clear();
+    }
+    bool done = false;
+    auto timer = node.create_wall_timer(1ms, [&] {
+      if (done) return;
+      for (int i = 0; i < iters; ++i) {
+        auto m = std::make_unique<Image>();
+        m->data.resize(1024);
+        std::this_thread::sleep_for(100us);  // paced: the reliable writer and the other thread keep up
+        t0_ns = Clock::now().time_since_epoch().count();
+        pub->publish(std::move(m));
+      }
+      done = true;
+    });
+    exec.spin_until([&] { return done; }, 120s);
+    timer->cancel();
+    std::this_thread::sleep_for(20ms);
+    std::lock_guard l(mu);
+    return stats(lat);
+  };
+  const Stats inline_alone = measure(true), queued_alone = measure(false);
+  const pid_t sink = cairn::spawn_process({self, "sink", "60"});
+  const bool matched = exec.spin_until([&] { return pub->inter_process_subscription_count() > 0; }, 20s);
+  const Stats inline_with = measure(true), queued_with = measure(false);
+  kill(sink, SIGTERM);
+  waitpid(sink, nullptr, 0);
+  other.cancel();
+  other_thread.join();
+  for (const auto& [name, with, alone] : {std::tuple{"inline", inline_with, inline_alone}, std::tuple{"queued", queued_with, queued_alone}}) {
+    std::printf(
+        "{\"case\":\"mixed_%s\",\"size\":\"1KiB\",\"remote_matched\":%s,\"p50_ns\":%.0f,\"p99_ns\":%.0f,"
+        "\"baseline\":\"same local subscriber, no remote one\",\"baseline_p50_ns\":%.0f,\"baseline_p99_ns\":%.0f,"
+        "\"ratio_p50\":%.2f,\"goal\":\"ratio_p50<=1.1\"}\n",
+        name, matched ? "true" : "false", with.p50, with.p99, alone.p50, alone.p99, alone.p50 > 0 ? with.p50 / alone.p50 : 0.0);
+  }
+  std::fflush(stdout);
+}
+
 // ---------------- DDS, two processes ----------------
 int pong_main(bool immediate) {
   cairn::Executor::install_signal_handlers();
@@ -808,7 +873,7 @@ int main(int argc, char** argv) {
   if (mode == "sink") return sink_main(argc > 2 ? std::atof(argv[2]) : 5.0);
   if (mode != "ipc") {
     std::cerr << "usage: cairn bench ipc [--quick] [--only same_thread|cross_thread|dds_rtt|dds_throughput|dispatch|idle|"
-                 "component_load|respawn]\n";
+                 "component_load|respawn|mixed]\n";
     return 2;
   }
   bool quick = false;
@@ -825,7 +890,7 @@ int main(int argc, char** argv) {
     }
   }
   static const std::vector<std::string> kCases = {"same_thread", "cross_thread", "dds_rtt", "dds_throughput",
-                                                 "dispatch", "idle", "component_load", "respawn"};
+                                                 "dispatch", "idle", "component_load", "respawn", "mixed"};
   if (!only.empty() && std::find(kCases.begin(), kCases.end(), only) == kCases.end()) {
     std::cerr << "cairn: bench: --only: unknown case '" << only << "'\n";
     return 2;
@@ -857,5 +922,6 @@ int main(int argc, char** argv) {
   if (want("idle")) idle(2.0);
   if (want("component_load")) component_load(quick ? 20 : 100);
   if (want("respawn")) respawn(self, quick ? 3 : 5);
+  if (want("mixed")) mixed(self, quick ? 2000 : 10000);
   return 0;
 }
