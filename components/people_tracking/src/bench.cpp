@@ -422,13 +422,13 @@ std::string benchJson(const BenchParams& p, const BenchResult& r) {
     char buf[768];
     std::snprintf(buf, sizeof buf,
                   "{\"mota\": %.4f, \"motp\": %.4f, \"id_switches\": %zu, \"id_switches_per_100_tracks\": %.3f, "
-                  "\"fp\": %zu, \"fn\": %zu, \"matches\": %zu, \"gt\": %zu, \"gt_tracks\": %zu, "
+                  "\"fp\": %zu, \"fn\": %zu, \"matches\": %zu, \"gt\": %zu, \"gt_tracks\": %zu, \"id_transfers\": %zu, "
                   "\"hota\": %.4f, \"deta\": %.4f, \"assa\": %.4f, \"loca\": %.4f, \"hota_at_0_5\": %.4f, "
                   "\"deta_at_0_5\": %.4f, \"assa_at_0_5\": %.4f, \"idf1\": %.4f, \"idp\": %.4f, \"idr\": %.4f, "
                   "\"ospa_m\": %.4f, "
                   "\"scans_per_second\": %.1f}",
                   b.mot.mota(), b.mot.motp(), b.mot.id_switches, b.mot.idSwitchesPer100Tracks(), b.mot.fp, b.mot.fn,
-                  b.mot.matches, b.mot.gt, b.mot.gt_tracks, b.hota.hota, b.hota.deta, b.hota.assa, b.hota.loca,
+                  b.mot.matches, b.mot.gt, b.mot.gt_tracks, b.mot.id_transfers, b.hota.hota, b.hota.deta, b.hota.assa, b.hota.loca,
                   b.hota.hota_alpha[HotaMetrics::kHalf], b.hota.deta_alpha[HotaMetrics::kHalf],
                   b.hota.assa_alpha[HotaMetrics::kHalf], b.id.idf1, b.id.idp, b.id.idr, b.ospa,
                   b.scansPerSecond(r.scans));

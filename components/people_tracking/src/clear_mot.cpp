@@ -90,6 +90,11 @@ void ClearMot::addFrame(const std::vector<MotObject>& gt, const std::vector<MotO
     current_[gt[i].id] = h.id;
     frame_.push_back({gt[i].id, h.id, switched_from[i]});
     last_match_[gt[i].id] = h.id;
+    const auto [it, first] = hyp_last_.emplace(h.id, gt[i].id);
+    if (!first && it->second != gt[i].id) {
+      ++m_.id_transfers;
+      it->second = gt[i].id;
+    }
   }
   for (std::size_t j = 0; j < hyp.size(); ++j)
     if (!hyp_used[j]) ++m_.fp;

@@ -25,6 +25,7 @@ TEST(ClearMot, CountsMatchesMissesFalsePositivesAndSwitches) {
   EXPECT_EQ(m.fp, 1u);
   EXPECT_EQ(m.ignored, 1u);
   EXPECT_EQ(m.id_switches, 1u);
+  EXPECT_EQ(m.id_transfers, 0u);  // 11 and 20 each stayed on one person
   EXPECT_EQ(m.gt_tracks, 2u);
   EXPECT_NEAR(m.mota(), 1.0 - 3.0 / 7.0, 1e-12);
   EXPECT_NEAR(m.motp(), (0.1 + 0.2 + 0.1 + 0 + 0 + 0.3) / 6.0, 1e-12);
@@ -315,6 +316,7 @@ TEST(IdF1, ChargesATrackThatCarriesOneIdOverTwoPeopleWhichClearMotDoesNotCount) 
     hota.addFrame(gt, hyp);
   }
   EXPECT_EQ(mot.metrics().id_switches, 0u);
+  EXPECT_EQ(mot.metrics().id_transfers, 1u);  // track 5: person 1, then person 2
   EXPECT_NEAR(mot.metrics().mota(), 1.0, 1e-12);
   const IdF1::Result r = idf1.metrics();
   EXPECT_EQ(r.idtp, 10u);

@@ -17,7 +17,7 @@ import sys
 import tempfile
 
 TOOL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "score_dump.py")
-COUNTS = ["id_switches", "fp", "fn", "matches", "gt", "gt_tracks"]
+COUNTS = ["id_switches", "id_transfers", "fp", "fn", "matches", "gt", "gt_tracks"]
 RATIOS = ["mota", "motp", "id_switches_per_100_tracks", "hota", "deta", "assa", "loca", "hota_at_0_5",
           "deta_at_0_5", "assa_at_0_5", "idf1", "idp", "idr", "ospa_m"]
 

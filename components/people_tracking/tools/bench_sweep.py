@@ -2,7 +2,7 @@
 """ID-switch sweep: `cairn people bench` over ETH/hotel/zara01 x static/circle:2.0 x seeds, for one or more
 binaries/option sets in the same session. Prints per-scene medians (MOTA, switches per 100 person-tracks, HOTA,
 IDF1; switches summed) and totals over all runs (switches, FP, FN,
-lowest MOTA; mean HOTA, DetA, AssA, lowest HOTA; mean IDF1). The runs are deterministic; -j runs several at once.
+id transfers, lowest MOTA; mean HOTA, DetA, AssA, lowest HOTA; mean IDF1). The runs are deterministic; -j runs several at once.
 
   bench_sweep.py [--data DIR] [--seeds 1,2,3] [-j N] LABEL=BINARY[::EXTRA OPTIONS] ...
 
@@ -67,6 +67,7 @@ def main():
         tracks = sum(x["gt_tracks"] for x in allr)
         sw = sum(x["id_switches"] for x in allr)
         print(f"{label}: runs {len(allr)}  IDSW {sw} ({100.0 * sw / tracks:.2f} per 100 tracks)  "
+              f"id transfers {sum(x['id_transfers'] for x in allr)}  "
               f"FP {sum(x['fp'] for x in allr)}  FN {sum(x['fn'] for x in allr)}  "
               f"min MOTA {min(x['mota'] for x in allr):.3f}  "
               f"HOTA {statistics.mean(x['hota'] for x in allr):.3f} (DetA {statistics.mean(x['deta'] for x in allr):.3f} "

@@ -111,8 +111,8 @@ def drop_dont_care(gt, hyp, dc, threshold):
 
 
 def clear_mot(frames, threshold):
-    last, current, seen = {}, {}, set()
-    n_gt = matches = fp = fn = sw = 0
+    last, current, seen, hyp_last = {}, {}, set(), {}
+    n_gt = matches = fp = fn = sw = transfers = 0
     dsum = 0.0
     for gt, hyp in frames:
         n_gt += len(gt)
@@ -143,9 +143,13 @@ def clear_mot(frames, threshold):
             matches += 1
             dsum += dist(gp, hp)
             current[g] = last[g] = h
+            if hyp_last.setdefault(h, g) != g:
+                transfers += 1
+                hyp_last[h] = g
         fp += used.count(False)
     return {"mota": 1 - (fn + fp + sw) / n_gt if n_gt else 0.0, "motp": dsum / matches if matches else 0.0,
-            "id_switches": sw, "fp": fp, "fn": fn, "matches": matches, "gt": n_gt, "gt_tracks": len(seen)}
+            "id_switches": sw, "fp": fp, "fn": fn, "matches": matches, "gt": n_gt, "gt_tracks": len(seen),
+            "id_transfers": transfers}
 
 
 def hota(frames, zero):

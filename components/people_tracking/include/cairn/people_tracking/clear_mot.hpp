@@ -1,7 +1,9 @@
 // CLEAR MOT metrics (Bernardin & Stiefelhagen 2008): per frame, correspondences from the previous frame are
 // kept while within the match threshold, the rest are assigned optimally (Hungarian on distances); an ID switch
 // is counted when a ground-truth object is matched to a different hypothesis than at its last match.
-// MOTA = 1 - (FN + FP + IDSW) / GT, MOTP = mean distance of matches.
+// MOTA = 1 - (FN + FP + IDSW) / GT, MOTP = mean distance of matches. Not part of CLEAR MOT, counted beside it:
+// id_transfers, the mirror image of a switch — a hypothesis matched to a different object than at its last match
+// (one track id carried over to another person, which CLEAR MOT does not charge).
 #pragma once
 
 #include <Eigen/Core>
@@ -16,7 +18,8 @@ struct MotObject {
 };
 
 struct MotMetrics {
-  std::size_t frames = 0, gt = 0, matches = 0, fp = 0, fn = 0, id_switches = 0, gt_tracks = 0, ignored = 0;
+  std::size_t frames = 0, gt = 0, matches = 0, fp = 0, fn = 0, id_switches = 0, gt_tracks = 0, ignored = 0,
+              id_transfers = 0;
   double distance_sum = 0.0;
   [[nodiscard]] double mota() const { return gt ? 1.0 - double(fn + fp + id_switches) / double(gt) : 0.0; }
   [[nodiscard]] double motp() const { return matches ? distance_sum / double(matches) : 0.0; }
@@ -54,6 +57,7 @@ class ClearMot {
   MotMetrics m_;
   std::map<int, int> last_match_;  // gt id -> hypothesis id at its last match
   std::map<int, int> current_;     // gt id -> hypothesis id matched in the previous frame
+  std::map<int, int> hyp_last_;    // hypothesis id -> gt id at its last match
   std::map<int, bool> seen_gt_;
   std::vector<MotCorrespondence> frame_;
 };
