@@ -11,6 +11,16 @@ namespace {
 constexpr double kForbidden = 1e9;
 // S >= alpha, with a tolerance so that S = 1 - 0.5/1.0 counts at alpha = 0.5.
 bool reaches(double s, int k) { return s >= HotaMetrics::alpha(k) - 1e-9; }
+
+// A (ground truth, hypothesis) pair of dense indices as one map key, and back.
+std::uint64_t pairKey(int g, int h) { return (std::uint64_t(std::uint32_t(g)) << 32) | std::uint32_t(h); }
+int keyGt(std::uint64_t k) { return static_cast<int>(k >> 32); }
+int keyHyp(std::uint64_t k) { return static_cast<int>(k & 0xffffffffu); }
+
+// Dense index of `id` (the next free one the first time it is seen).
+int denseIndex(std::unordered_map<int, int>& index, int id) {
+  return index.emplace(id, static_cast<int>(index.size())).first->second;
+}
 }  // namespace
 
 Hota::Hota(double zero_distance, double dont_care_threshold)
@@ -19,26 +29,30 @@ Hota::Hota(double zero_distance, double dont_care_threshold)
 void Hota::addFrame(const std::vector<MotObject>& gt, const std::vector<MotObject>& all_hyp,
                     const std::vector<Eigen::Vector2d>& dont_care) {
   const std::vector<MotObject> hyp = dropDontCareHypotheses(gt, all_hyp, dont_care, dont_care_threshold_);
-  auto dense = [](std::unordered_map<int, int>& index, std::vector<std::size_t>& frames, int id) {
-    const auto [it, added] = index.emplace(id, static_cast<int>(frames.size()));
-    if (added) frames.push_back(0);
-    ++frames[static_cast<std::size_t>(it->second)];
-    return it->second;
+  // Dense indices of this frame's objects, counting the frames each is present in.
+  auto present = [](std::unordered_map<int, int>& index, std::vector<std::size_t>& frames, const std::vector<MotObject>& objects) {
+    std::vector<int> out;
+    for (const MotObject& o : objects) {
+      const int i = denseIndex(index, o.id);
+      if (static_cast<std::size_t>(i) == frames.size()) frames.push_back(0);
+      ++frames[static_cast<std::size_t>(i)];
+      out.push_back(i);
+    }
+    return out;
   };
-  Frame f;
-  for (const MotObject& g : gt) f.gt.push_back(dense(gt_index_, gt_frames_, g.id));
-  for (const MotObject& h : hyp) f.hyp.push_back(dense(hyp_index_, hyp_frames_, h.id));
+  const std::vector<int> gi = present(gt_index_, gt_frames_, gt), hi = present(hyp_index_, hyp_frames_, hyp);
   gt_total_ += gt.size();
   hyp_total_ += hyp.size();
+  std::vector<Pair> pairs;
   for (std::size_t i = 0; i < gt.size(); ++i)
     for (std::size_t j = 0; j < hyp.size(); ++j) {
       const double s = 1.0 - (gt[i].p - hyp[j].p).norm() / zero_distance_;
       if (s <= 0.0) continue;
-      f.pairs.push_back({f.gt[i], f.hyp[j], s});
+      pairs.push_back({gi[i], hi[j], s});
       for (int k = 0; k < HotaMetrics::kAlphas; ++k)
-        if (reaches(s, k)) ++potential_[static_cast<std::size_t>(k)][key(f.gt[i], f.hyp[j])];
+        if (reaches(s, k)) ++potential_[static_cast<std::size_t>(k)][pairKey(gi[i], hi[j])];
     }
-  frames_.push_back(std::move(f));
+  frames_.push_back(std::move(pairs));
 }
 
 HotaMetrics Hota::metrics() const {
@@ -54,9 +68,9 @@ HotaMetrics Hota::metrics() const {
     std::unordered_map<std::uint64_t, std::size_t> matched;
     std::size_t tp = 0;
     double loc = 0.0;
-    for (const Frame& f : frames_) {
+    for (const std::vector<Pair>& pairs : frames_) {
       std::vector<const Pair*> cand;
-      for (const Pair& p : f.pairs)
+      for (const Pair& p : pairs)
         if (reaches(p.s, k)) cand.push_back(&p);
       if (cand.empty()) continue;
       std::vector<int> rows, cols;  // dense ids in this frame's candidate pairs
@@ -67,25 +81,25 @@ HotaMetrics Hota::metrics() const {
       // solveAssignment first maximises the number of non-forbidden matches, then minimises the cost: the paper's
       // 1/eps + A_max + eps*S.
       Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(static_cast<long>(rows.size()), static_cast<long>(cols.size()), kForbidden);
+      Eigen::MatrixXd sim = Eigen::MatrixXd::Zero(cost.rows(), cost.cols());
       for (const Pair* p : cand) {
         const long r = std::find(rows.begin(), rows.end(), p->g) - rows.begin();
         const long c = std::find(cols.begin(), cols.end(), p->h) - cols.begin();
-        const double a_max = assIou(p->g, p->h, double(potential.at(key(p->g, p->h))));
+        const double a_max = assIou(p->g, p->h, double(potential.at(pairKey(p->g, p->h))));
         cost(r, c) = -(a_max + 1e-3 * p->s);
+        sim(r, c) = p->s;
       }
       const std::vector<int> match = solveAssignment(cost, kForbidden);
       for (std::size_t r = 0; r < rows.size(); ++r) {
         if (match[r] < 0) continue;
-        const int g = rows[r], h = cols[static_cast<std::size_t>(match[r])];
         ++tp;
-        ++matched[key(g, h)];
-        for (const Pair* p : cand)
-          if (p->g == g && p->h == h) loc += p->s;
+        ++matched[pairKey(rows[r], cols[static_cast<std::size_t>(match[r])])];
+        loc += sim(static_cast<long>(r), match[r]);
       }
     }
     double ass = 0.0;
     for (const auto& [kk, n] : matched)
-      ass += double(n) * assIou(static_cast<int>(kk >> 32), static_cast<int>(kk & 0xffffffffu), double(n));
+      ass += double(n) * assIou(keyGt(kk), keyHyp(kk), double(n));
     const double det_denominator = double(gt_total_ + hyp_total_ - tp);
     const auto i = static_cast<std::size_t>(k);
     m.assa_alpha[i] = tp ? ass / double(tp) : 0.0;
@@ -109,13 +123,12 @@ void IdF1::addFrame(const std::vector<MotObject>& gt, const std::vector<MotObjec
   const std::vector<MotObject> hyp = dropDontCareHypotheses(gt, all_hyp, dont_care, threshold_);
   gt_total_ += gt.size();
   hyp_total_ += hyp.size();
+  std::vector<int> hi;
+  for (const MotObject& h : hyp) hi.push_back(denseIndex(hyp_index_, h.id));
   for (const MotObject& g : gt) {
-    const int gi = gt_index_.emplace(g.id, static_cast<int>(gt_index_.size())).first->second;
-    for (const MotObject& h : hyp) {
-      const int hi = hyp_index_.emplace(h.id, static_cast<int>(hyp_index_.size())).first->second;
-      if ((g.p - h.p).norm() <= threshold_)
-        ++together_[(std::uint64_t(std::uint32_t(gi)) << 32) | std::uint32_t(hi)];
-    }
+    const int gi = denseIndex(gt_index_, g.id);
+    for (std::size_t j = 0; j < hyp.size(); ++j)
+      if ((g.p - hyp[j].p).norm() <= threshold_) ++together_[pairKey(gi, hi[j])];
   }
 }
 
@@ -126,7 +139,7 @@ IdF1::Result IdF1::metrics() const {
     // Maximise the frames together: cost -IDTP, 0 for pairs never together (not forbidden: solveAssignment would
     // then maximise the number of pairs first, not the frames).
     Eigen::MatrixXd cost = Eigen::MatrixXd::Zero(static_cast<long>(gt_index_.size()), static_cast<long>(hyp_index_.size()));
-    for (const auto& [k, n] : together_) cost(static_cast<long>(k >> 32), static_cast<long>(k & 0xffffffffu)) = -double(n);
+    for (const auto& [k, n] : together_) cost(keyGt(k), keyHyp(k)) = -double(n);
     const std::vector<int> match = solveAssignment(cost, kForbidden);
     for (std::size_t g = 0; g < match.size(); ++g)
       if (match[g] >= 0 && cost(static_cast<long>(g), match[g]) < 0.0) r.idtp += static_cast<std::size_t>(-cost(static_cast<long>(g), match[g]));

@@ -56,16 +56,11 @@ class Hota {
     int g, h;   // dense indices
     double s;   // similarity > 0
   };
-  struct Frame {
-    std::vector<int> gt, hyp;  // dense indices of the objects present
-    std::vector<Pair> pairs;
-  };
-  static std::uint64_t key(int g, int h) { return (std::uint64_t(std::uint32_t(g)) << 32) | std::uint32_t(h); }
   double zero_distance_, dont_care_threshold_;
   std::unordered_map<int, int> gt_index_, hyp_index_;
   std::vector<std::size_t> gt_frames_, hyp_frames_;  // frames each object is present in
   std::array<std::unordered_map<std::uint64_t, std::size_t>, HotaMetrics::kAlphas> potential_;  // S >= alpha
-  std::vector<Frame> frames_;
+  std::vector<std::vector<Pair>> frames_;  // per frame, the pairs with S > 0
   std::size_t gt_total_ = 0, hyp_total_ = 0;
 };
 
