@@ -168,6 +168,30 @@ std::vector<PersonDetection> cameraDetections(const CameraModel& cam, const Pose
   }
   return out;
 }
+// Every score of one tracker's output. The don't-care rule runs once per frame (in CLEAR MOT); the other scorers
+// get the hypotheses it kept.
+struct Scorers {
+  explicit Scorers(double threshold)
+      : mot(threshold), hota(2 * threshold, threshold), idf1(threshold), ospa(2 * threshold, 1.0, threshold) {}
+  void addFrame(const std::vector<MotObject>& gt, const std::vector<MotObject>& hyp,
+                const std::vector<Eigen::Vector2d>& dont_care) {
+    mot.addFrame(gt, hyp, dont_care);
+    hota.addFrame(gt, mot.lastHypotheses());
+    idf1.addFrame(gt, mot.lastHypotheses());
+    ospa.addFrame(gt, mot.lastHypotheses());
+  }
+  void into(BenchRun& run) const {
+    run.mot = mot.metrics();
+    run.hota = hota.metrics();
+    run.id = idf1.metrics();
+    run.ospa = ospa.mean();
+  }
+  ClearMot mot;
+  Hota hota;
+  IdF1 idf1;
+  Ospa ospa;
+};
+
 }  // namespace
 
 BenchResult runBench(const BenchParams& params) {
@@ -237,10 +261,7 @@ BenchResult runBench(const BenchParams& params) {
   }
   PeopleTracker tracker(params.tracker);
   NearestNeighbourTracker baseline;
-  ClearMot mot(params.match_threshold), mot_base(params.match_threshold);
-  Hota hota(2 * params.match_threshold, params.match_threshold), hota_base(2 * params.match_threshold, params.match_threshold);
-  IdF1 idf1(params.match_threshold), idf1_base(params.match_threshold);
-  Ospa ospa(2 * params.match_threshold, 1.0, params.match_threshold), ospa_base(2 * params.match_threshold, 1.0, params.match_threshold);
+  Scorers score(params.match_threshold), score_base(params.match_threshold);
   std::mt19937_64 rng(mix(params.seed, 1));
   std::mt19937_64 oracle_rng(mix(params.seed, 2));  // separate stream: the scans stay those of a normal run
   std::mt19937_64 camera_rng(mix(params.seed, 3));  // likewise
@@ -379,20 +400,14 @@ BenchResult runBench(const BenchParams& params) {
       if (inRange(tr.position())) hyp.push_back({tr.id, tr.position()});
     for (const MotObject& o : baseline.confirmed())
       if (inRange(o.p)) hyp_base.push_back(o);
-    mot.addFrame(gt, hyp, dont_care);
-    mot_base.addFrame(gt, hyp_base, dont_care);
-    hota.addFrame(gt, hyp, dont_care);
-    hota_base.addFrame(gt, hyp_base, dont_care);
-    idf1.addFrame(gt, hyp, dont_care);
-    idf1_base.addFrame(gt, hyp_base, dont_care);
-    ospa.addFrame(gt, hyp, dont_care);
-    ospa_base.addFrame(gt, hyp_base, dont_care);
+    score.addFrame(gt, hyp, dont_care);
+    score_base.addFrame(gt, hyp_base, dont_care);
     if (gt_csv.is_open()) {
       for (const auto& g : gt) gt_csv << t << ',' << g.id << ',' << g.p.x() << ',' << g.p.y() << '\n';
       for (const auto& d : dont_care) dc_csv << t << ',' << d.x() << ',' << d.y() << '\n';
       robot_csv << t << ',' << pose.x << ',' << pose.y << ',' << pose.theta << '\n';
       for (const auto& h : hyp) tr_csv << t << ',' << h.id << ',' << h.p.x() << ',' << h.p.y() << '\n';
-      for (const auto& c : mot.lastFrame()) match_csv << t << ',' << c.gt << ',' << c.hyp << ',' << c.switched_from << '\n';
+      for (const auto& c : score.mot.lastFrame()) match_csv << t << ',' << c.gt << ',' << c.hyp << ',' << c.switched_from << '\n';
       for (const Track& tr : tracker.tracks())
         all_csv << t << ',' << tr.id << ',' << tr.state(0) << ',' << tr.state(1) << ',' << tr.state(2) << ','
                 << tr.state(3) << ',' << tr.confirmed << ',' << tr.stamp - tr.last_update << ','
@@ -406,14 +421,8 @@ BenchResult runBench(const BenchParams& params) {
   }
   result.duration = static_cast<double>(result.scans) * dt;
   result.mean_people_counted = result.scans ? counted_sum / static_cast<double>(result.scans) : 0.0;
-  result.cairn.mot = mot.metrics();
-  result.baseline.mot = mot_base.metrics();
-  result.cairn.hota = hota.metrics();
-  result.baseline.hota = hota_base.metrics();
-  result.cairn.id = idf1.metrics();
-  result.baseline.id = idf1_base.metrics();
-  result.cairn.ospa = ospa.mean();
-  result.baseline.ospa = ospa_base.mean();
+  score.into(result.cairn);
+  score_base.into(result.baseline);
   return result;
 }
 

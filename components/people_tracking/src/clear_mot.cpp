@@ -33,7 +33,8 @@ void ClearMot::addFrame(const std::vector<MotObject>& gt, const std::vector<MotO
                         const std::vector<Eigen::Vector2d>& dont_care) {
   constexpr double kForbidden = 1e9;
   // 0. Don't-care objects: a track on a person who does not count can then not be matched to a counted neighbour.
-  const std::vector<MotObject> hyp = dropDontCareHypotheses(gt, all_hyp, dont_care, threshold_, &m_.ignored);
+  kept_ = dropDontCareHypotheses(gt, all_hyp, dont_care, threshold_, &m_.ignored);
+  const std::vector<MotObject>& hyp = kept_;
   ++m_.frames;
   m_.gt += gt.size();
   for (const auto& g : gt) seen_gt_[g.id] = true;

@@ -85,6 +85,12 @@ def dist(a, b):
     return math.hypot(a[0] - b[0], a[1] - b[1])
 
 
+def gated(a, b, threshold):
+    """The distance as an assignment cost, FORBIDDEN beyond the threshold."""
+    d = dist(a, b)
+    return d if d <= threshold else FORBIDDEN
+
+
 def load(d):
     frames = collections.defaultdict(lambda: ([], [], []))  # t -> (gt, hyp, dont_care)
     for name, slot in (("groundtruth.csv", 0), ("tracks.csv", 1), ("dontcare.csv", 2)):
@@ -104,7 +110,7 @@ def drop_dont_care(gt, hyp, dc, threshold):
     if not dc or not hyp:
         return hyp
     objs = [p for _, p in gt] + dc
-    cost = [[dist(o, h[1]) if dist(o, h[1]) <= threshold else FORBIDDEN for h in hyp] for o in objs]
+    cost = [[gated(o, h[1], threshold) for h in hyp] for o in objs]
     match = assignment(cost)
     dropped = {match[r] for r in range(len(gt), len(objs)) if match[r] >= 0}
     return [h for j, h in enumerate(hyp) if j not in dropped]
@@ -126,8 +132,7 @@ def clear_mot(frames, threshold):
         rows = [i for i in range(len(gt)) if gm[i] < 0]
         cols = [j for j in range(len(hyp)) if not used[j]]
         if rows and cols:
-            cost = [[dist(gt[i][1], hyp[j][1]) if dist(gt[i][1], hyp[j][1]) <= threshold else FORBIDDEN for j in cols]
-                    for i in rows]
+            cost = [[gated(gt[i][1], hyp[j][1], threshold) for j in cols] for i in rows]
             for r, c in enumerate(assignment(cost)):
                 if c >= 0:
                     i, j = rows[r], cols[c]

@@ -51,6 +51,8 @@ class ClearMot {
   [[nodiscard]] MotMetrics metrics() const;
   // The correspondences of the last addFrame (for dumps and switch analysis: one scorer, no re-matching).
   [[nodiscard]] const std::vector<MotCorrespondence>& lastFrame() const { return frame_; }
+  // The hypotheses of the last addFrame that the don't-care rule kept (for other scorers of the same frame).
+  [[nodiscard]] const std::vector<MotObject>& lastHypotheses() const { return kept_; }
 
  private:
   double threshold_;
@@ -60,6 +62,7 @@ class ClearMot {
   std::map<int, int> hyp_last_;    // hypothesis id -> gt id at its last match
   std::map<int, bool> seen_gt_;
   std::vector<MotCorrespondence> frame_;
+  std::vector<MotObject> kept_;
 };
 
 }  // namespace cairn::people_tracking

@@ -23,7 +23,8 @@
 // a set distance (localisation and cardinality errors in metres, identities not used), averaged over the frames
 // in which anything was present.
 //
-// Both apply the bench's don't-care rule first (dropDontCareHypotheses, as CLEAR MOT does).
+// All three apply the don't-care rule first (dropDontCareHypotheses, as CLEAR MOT does); the bench instead gives them
+// the hypotheses CLEAR MOT kept (ClearMot::lastHypotheses), so the rule runs once per frame.
 #pragma once
 
 #include <array>
