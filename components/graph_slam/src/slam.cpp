@@ -799,12 +799,12 @@ OptimizerSummary GraphSlam::Impl::optimize() {
   const auto t0 = Clock::now();
   OptimizerSummary s;
   if (graph.variables().empty()) return s;
-  s = optimizer.optimize(graph);
-  for (SlamNode& n : nodes) n.global_pose = graph.pose2(n.id);
-  if (readmitAgreeingLoops()) {
+  const auto solve = [&] {
     s = optimizer.optimize(graph);
     for (SlamNode& n : nodes) n.global_pose = graph.pose2(n.id);
-  }
+  };
+  solve();
+  if (readmitAgreeingLoops()) solve();  // re-admitted loops change the solution: solve again
   if (last_node) {
     const SlamNode& n = nodes[static_cast<std::size_t>(*last_node)];
     map_to_local = compose(n.global_pose, inverse(n.local_pose));

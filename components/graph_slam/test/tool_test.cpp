@@ -194,3 +194,48 @@ TEST(Tool, RunAndEvalRejectBadOptionsAndFiles) {
   r = run("eval --poses " + poses + " --relations " + rel);
   EXPECT_EQ(r.code, 0) << r.err;
 }
+
+// The "laser_mount" array and "laser_mount_source" of a `run --json` line, e.g. "0.1 0 0 log".
+static std::string mountOf(const std::string& json) {
+  const std::regex re("\"laser_mount\":\\[([^,]+),([^,]+),([^\\]]+)\\],\"laser_mount_source\":\"([a-z]+)\"");
+  std::smatch m;
+  if (!std::regex_search(json, m, re)) return "no laser_mount in: " + json.substr(0, 200);
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "%.6g %.6g %.6g %s", std::stod(m[1]), std::stod(m[2]), std::stod(m[3]), m[4].str().c_str());
+  return buf;
+}
+
+TEST(Tool, RunTakesTheLaserMountFromTheLogUnlessParametersGiveIt) {
+  // FLASER: laser pose (0.1, 0, 0) and odometry pose (0, 0, 0) -> the mount is 0.1 m forward.
+  std::string beams, text;
+  for (int i = 0; i < 180; ++i) beams += " 2.00";
+  for (const char* stamp : {"100.000000", "100.100000", "100.200000"})
+    text += "FLASER 180" + beams + " 0.1 0 0 0 0 0 " + std::string(stamp) + " nohost " + stamp + "\n";
+  const std::string log = tempFile("cairn_slam_mount.log", text);
+  const std::string out = std::filesystem::temp_directory_path().string() + "/cairn_slam_run_mount";
+  ToolRun r = run("run --carmen " + log + " --out " + out + " --quiet --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(mountOf(r.out), "0.1 0 0 log");
+  // A mount given as parameters (--set or --config) wins: it was silently replaced by the log's.
+  r = run("run --carmen " + log + " --out " + out + " --quiet --json --set laser_x=0.3");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(mountOf(r.out), "0.3 0 0 parameters");
+  const std::string cfg = tempFile("cairn_slam_mount.yaml", "laser_theta: 0.5\n");
+  r = run("run --carmen " + log + " --out " + out + " --quiet --json --config " + cfg);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(mountOf(r.out), "0 0 0.5 parameters");
+  r = run("run --carmen " + log + " --out " + out + " --quiet --json --laser-mount zero");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(mountOf(r.out), "0 0 0 parameters");
+}
+
+TEST(Tool, ReadmeParameterTableIsTheToolsOwn) {
+  // The README's table is the component's parameter list: it must be what `cairn slam params --markdown` prints
+  // (it had drifted: a wrong default and eight missing keys).
+  const ToolRun r = run("params --markdown");
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_GT(std::count(r.out.begin(), r.out.end(), '\n'), 50) << r.out;
+  const std::string readme = slurp(std::string(CAIRN_SOURCE_ROOT) + "/components/graph_slam/README.md");
+  EXPECT_NE(readme.find(r.out), std::string::npos)
+      << "components/graph_slam/README.md: paste the output of `cairn slam params --markdown` into \"### Parameters\"";
+}

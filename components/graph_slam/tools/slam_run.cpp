@@ -138,7 +138,8 @@ int slamEvalVerb(const std::vector<std::string>& args) {
 namespace {
 
 // Applies a flat `key: value` YAML config (keys of slamParameters()); errors name file:line and the key.
-void applyConfig(const std::string& path, gs::SlamOptions& options) {
+// Applies a --config file; returns the keys it set.
+std::vector<std::string> applyConfig(const std::string& path, gs::SlamOptions& options) {
   YAML::Node root;
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
@@ -162,7 +163,8 @@ void applyConfig(const std::string& path, gs::SlamOptions& options) {
   } catch (const YAML::Exception& e) {
     throw cairn::sim::InputError(path, e.mark.line + 1, e.msg);
   }
-  if (root.IsNull()) return;
+  std::vector<std::string> keys;
+  if (root.IsNull()) return keys;
   if (!root.IsMap()) throw cairn::sim::InputError(path, root.Mark().line + 1, "expected a map of SLAM parameters");
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>();
@@ -173,7 +175,9 @@ void applyConfig(const std::string& path, gs::SlamOptions& options) {
     } catch (const std::invalid_argument& e) {
       throw cairn::sim::InputError(path, kv.first.Mark().line + 1, e.what());
     }
+    keys.push_back(key);
   }
+  return keys;
 }
 
 struct LogScan {
@@ -228,6 +232,7 @@ int slamRunVerb(const std::vector<std::string>& args) {
   bool json = false, quiet = false, skip_malformed = false;
   long limit = -1;
   std::string laser_mount = "auto";
+  bool mount_given = false;
   gs::SlamOptions options;
   try {
     std::vector<std::pair<std::string, std::string>> sets;
@@ -258,8 +263,14 @@ int slamRunVerb(const std::vector<std::string>& args) {
     }
     if (log.empty() || out_dir.empty()) throw std::invalid_argument("run needs --carmen <log> and --out <dir>");
     if (laser_mount != "auto" && laser_mount != "zero") throw std::invalid_argument("--laser-mount must be auto or zero");
-    if (!config.empty()) applyConfig(config, options);
-    for (const auto& [k, v] : sets) gs::setSlamParameter(options, k, v);
+    std::vector<std::string> keys;
+    if (!config.empty()) keys = applyConfig(config, options);
+    for (const auto& [k, v] : sets) {
+      gs::setSlamParameter(options, k, v);
+      keys.push_back(k);
+    }
+    // A mount given as parameters (laser_x/y/theta) wins over the log's.
+    mount_given = std::any_of(keys.begin(), keys.end(), [](const std::string& k) { return k.rfind("laser_", 0) == 0; });
   } catch (const std::exception& e) {
     return fail(e.what());
   }
@@ -282,7 +293,8 @@ int slamRunVerb(const std::vector<std::string>& args) {
     malformed_warnings = 0;
     std::size_t total = info.lasers;
     if (limit >= 0) total = std::min(total, static_cast<std::size_t>(limit));
-    if (laser_mount == "auto" && info.mount) options.sensor_in_base = *info.mount;
+    const bool mount_from_log = laser_mount == "auto" && info.mount && !mount_given;
+    if (mount_from_log) options.sensor_in_base = *info.mount;
     gs::GraphSlam slam = load_path.empty() ? gs::GraphSlam(options) : gs::GraphSlam::load(load_path, options);
     cairn::sim::CarmenReader reader(log, ropt);
     cairn::sim::CarmenRecord rec;
@@ -329,7 +341,11 @@ int slamRunVerb(const std::vector<std::string>& args) {
     const gs::LoopRecall recall = slam.loopRecall();
     const double duration = last_stamp - first_stamp;
     JsonObject j;
+    const gs::Pose2& m = options.sensor_in_base;
     j.str("log", log)
+        .raw("laser_mount", "[" + cairn::slam_cli::jsonNumber(m.t.x()) + "," + cairn::slam_cli::jsonNumber(m.t.y()) + "," +
+                                    cairn::slam_cli::jsonNumber(m.theta) + "]")
+        .str("laser_mount_source", mount_from_log ? "log" : "parameters")
         .integer("scans", static_cast<long long>(done))
         .integer("scans_rejected", static_cast<long long>(rejected))
         .integer("nodes", static_cast<long long>(st.nodes))

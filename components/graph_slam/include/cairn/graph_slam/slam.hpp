@@ -7,7 +7,8 @@
 //    over a window covering the search radius, then grid refinement (correlative_matcher.hpp, grid_refiner.hpp);
 //    information Ω from the residuals (Stüde §3.2.2: Ω = I/σ̂², σ̂ from the median absolute deviation of the
 //    distances of the matched points to the map's occupied cells);
-//  - loop edges carry a Huber kernel; the graph is re-optimized with the cairn optimizer (warm-started).
+//  - loop edges carry a robust kernel (`loop_kernel`, default DCS; Huber selectable); the graph is re-optimized
+//    with the cairn optimizer (warm-started).
 // A loaded map (load()) can be extended in a new session (a new trajectory found by a global search with
 // Stüde's α_min / n_start / n_ver / r_ver verification rule) or used for localization only. When local SLAM
 // loses track (LocalSlamOptions::lost_scans unmatched scans: kidnapped), a new trajectory starts and is
