@@ -239,3 +239,18 @@ TEST(Tool, ReadmeParameterTableIsTheToolsOwn) {
   EXPECT_NE(readme.find(r.out), std::string::npos)
       << "components/graph_slam/README.md: paste the output of `cairn slam params --markdown` into \"### Parameters\"";
 }
+
+TEST(Tool, VerbHelpPrintsTheUsageAndEvalRefusesAnOdometryBaselineWithoutRelations) {
+  for (const char* verb : {"optimize", "run", "eval", "params", "train-verifier", "eval-verifier"}) {
+    const ToolRun r = run(std::string(verb) + " --help");
+    EXPECT_EQ(r.code, 0) << verb << ": " << r.err;  // was "unknown option '--help'", exit 2
+    EXPECT_NE(r.out.find("cairn slam eval-verifier"), std::string::npos) << verb;
+  }
+  ToolRun r = run("nonsense --help");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("unknown verb 'nonsense'"), std::string::npos) << r.err;
+  // The odometry baseline is scored on the relations; without them it was silently ignored.
+  r = run("eval --poses p.txt --odometry-baseline raw.log --corrected c.log --carmen raw.log");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "cairn: slam: --odometry-baseline needs --relations\n");
+}

@@ -42,8 +42,11 @@ constexpr const char* kUsage =
     "                       [--corrected <corrected log> --carmen <raw log>] [--json] [--allow-missing]\n"
     "                       [--stamp-tolerance S]   Kuemmerle et al. 2009 relative-pose error, corrected-log ATE\n"
     "       cairn slam params [--markdown]          the SLAM parameters (--config keys = component params)\n"
-    "       cairn slam train-verifier --logs a.log.gz[,b...] --out model.yml.gz [--weak-count 50] [--seed N] [--json]\n"
-    "       cairn slam eval-verifier --model model.yml.gz --logs c.log.gz [--threshold T] [--json]\n";
+    "       cairn slam train-verifier --logs a.log.gz[,b...] --out model.yml.gz [--weak-count 50] [--seed N]\n"
+    "                                 [--target-fpr 0.01] [--max-pairs 5000] [--json]\n"
+    "       cairn slam eval-verifier --model model.yml.gz --logs c.log.gz[,d...] [--threshold T] [--seed N]\n"
+    "                                [--max-pairs 5000] [--max-negatives 20000] [--json]\n"
+    "       cairn slam <verb> --help   this text\n";
 
 int usageError(const std::string& what) {
   std::cerr << "cairn: slam: " << what << "\n" << kUsage;
@@ -238,6 +241,12 @@ int main(int argc, char** argv) {
   }
   const std::string verb = args[0];
   args.erase(args.begin());
+  const bool known = verb == "optimize" || verb == "run" || verb == "eval" || verb == "params" ||
+                     verb == "train-verifier" || verb == "eval-verifier";
+  if (known && !args.empty() && (args[0] == "-h" || args[0] == "--help")) {
+    std::cout << kUsage;
+    return 0;
+  }
   if (verb == "optimize") return optimizeVerb(args);
   if (verb == "run") return slamRunVerb(args);
   if (verb == "eval") return slamEvalVerb(args);

@@ -87,6 +87,8 @@ int slamEvalVerb(const std::vector<std::string>& args) {
     if (relations_path.empty() && corrected_log.empty())
       throw std::invalid_argument("eval needs --relations and/or --corrected <log> --carmen <raw log>");
     if (!corrected_log.empty() && raw_log.empty()) throw std::invalid_argument("--corrected needs --carmen <raw log>");
+    if (!odometry_log.empty() && relations_path.empty())  // it scores the log's odometry on the relations
+      throw std::invalid_argument("--odometry-baseline needs --relations");
   } catch (const std::exception& e) {
     return fail(e.what());
   }
