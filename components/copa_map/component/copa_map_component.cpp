@@ -95,7 +95,7 @@ class CopaMapNode : public cairn::Node {
     tc_.batch_size = static_cast<int>(declare_parameter<int64_t>("train.batch_size", tc_.batch_size, D{"mini-batch size (copa-map 1,100)", 1.0, 1e7, true}));
     tc_.tolerance = declare_parameter<double>("train.tolerance", tc_.tolerance, D{"relative epoch-ELBO change that stops training (copa-map 1e-3)", 0.0, 1.0, true});
     tc_.seed = static_cast<std::uint64_t>(declare_parameter<int64_t>("train.seed", 1, D{"mini-batch and k-means seed", 0.0, {}, true}));
-    mc_.seed = tc_.seed;
+    mc_.seed = mc_.period_init.seed = tc_.seed;  // as the CLI's `seed`: also Alg. 4.1's period sampling
     // Rate map output.
     rate_map_time_ = declare_parameter<double>("rate_map.time", 0.0, D{"s, ROS time the published rate map is for; 0: the time of publication", {}, {}, false});
     rate_map_max_ = declare_parameter<double>("rate_map.max_rate", 0.0, D{"rate shown as 100 in the grid; 0: the map's maximum", 0.0, 1e12, false});

@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -66,11 +67,34 @@ TEST(CopaCli, TrainPredictEval) {
   const std::string pred = slurp(dir + "/cli_pred.csv");
   EXPECT_EQ(pred.rfind("x1,x2,t,mean,std\n", 0), 0u);
   EXPECT_GT(std::count(pred.begin(), pred.end(), '\n'), 10);
+  {  // every row: the point it was asked for (t = 40), a non-negative rate and a positive std
+    std::istringstream rows(pred);
+    std::string row;
+    std::getline(rows, row);
+    int n = 0;
+    while (std::getline(rows, row)) {
+      double x1, x2, t, mean, sd;
+      ASSERT_EQ(std::sscanf(row.c_str(), "%lf,%lf,%lf,%lf,%lf", &x1, &x2, &t, &mean, &sd), 5) << row;
+      EXPECT_EQ(t, 40.0) << row;
+      EXPECT_TRUE(std::isfinite(mean) && mean >= 0 && std::isfinite(sd) && sd > 0) << row;
+      ++n;
+    }
+    EXPECT_GT(n, 10);
+  }
   ASSERT_EQ(run("eval --model " + dir + "/cli_model.txt --train " + dir + "/cli_train.csv --test " + dir +
                     "/cli_test.csv --json > " + dir + "/cli_eval.json", &err), 0) << err;
+  // Every documented key, each a finite number (the model file has a variance: NLPD and coverage too).
   const std::string js = slurp(dir + "/cli_eval.json");
-  EXPECT_NE(js.find("\"nrmse\": "), std::string::npos) << js;
-  EXPECT_NE(js.find("\"nlpd\": "), std::string::npos) << js;
+  for (const char* key : {"n_train", "n_test", "nrmse", "chi2", "nlpd", "coverage95", "train_seconds", "predict_seconds"}) {
+    std::string needle = "\"";
+    needle.append(key).append("\": ");
+    const std::size_t at = js.find(needle);
+    ASSERT_NE(at, std::string::npos) << key << " in " << js;
+    const double v = std::strtod(js.c_str() + at + needle.size(), nullptr);
+    EXPECT_TRUE(std::isfinite(v) && v >= 0) << key << " in " << js;
+  }
+  const double nrmse_file = std::strtod(js.c_str() + js.find("\"nrmse\": ") + 9, nullptr);
+  EXPECT_GT(nrmse_file, 0.0);
   ASSERT_EQ(run("eval --model ml --train " + dir + "/cli_train.csv --test " + dir + "/cli_test.csv --json > " + dir +
                     "/cli_ml.json", &err), 0) << err;
   EXPECT_NE(slurp(dir + "/cli_ml.json").find("\"nlpd\": null"), std::string::npos);
@@ -184,6 +208,10 @@ TEST(CopaCli, RenderChecksMapYamlTimesAndArea) {
   const std::string small = "--times 40 --bbox 14,-12,16,-10";
   // The flow form is valid YAML.
   EXPECT_EQ(render("{image: " + png + ", resolution: 0.05, origin: [-60, -40, 0]}\n", small), 0) << err;
+  for (const char* f : {"/cli_r_t40_mean.png", "/cli_r_t40_std.png"}) {  // PNG signature
+    const std::string img = slurp(dir + f);
+    EXPECT_EQ(img.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << f;
+  }
   EXPECT_EQ(render("image: " + png + "\nresolution: 0.05\norigin: [-60, -40, 0\nnegate: 0\n", small), 2);
   EXPECT_EQ(err.rfind("cairn: " + dir + "/cli_map.yaml:", 0), 0u) << err;
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;

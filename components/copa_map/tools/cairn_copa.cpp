@@ -256,6 +256,13 @@ int cmdTrain(const std::map<std::string, std::string>& a) {
   return 0;
 }
 
+// eval of a model whose training diverged: no scores (they would be of the restored last good state), exit 3 as
+// `train`.
+int evalDiverged(const std::string& which, const TrainReport& rep) {
+  std::fprintf(stderr, "cairn: copa: eval: training of %s diverged: %s\n", which.c_str(), rep.message.c_str());
+  return 3;
+}
+
 int cmdPredict(const std::map<std::string, std::string>& a) {
   const CopaMap cm = loadModel(need(a, "model"));
   const GridData pts = readGridCsv(need(a, "points"), false);
@@ -302,7 +309,8 @@ int cmdEval(const std::map<std::string, std::string>& a) {
   } else if (which == "gp-hom") {
     GpHomBaseline m;
     m.initialize(tr.X, tr.y, tr.durations, mc, Z.size() ? &Z : nullptr);
-    m.train(tr.X, tr.y, tc);
+    const TrainReport rep = m.train(tr.X, tr.y, tc);
+    if (rep.diverged) return evalDiverged(which, rep);
     t_train = now() - t0;
     t0 = now();
     p = m.predict(te.X);
@@ -312,8 +320,9 @@ int cmdEval(const std::map<std::string, std::string>& a) {
     if (which == "copa") {
       cm = CopaMap::initialize(tr.X, tr.y, tr.durations, mc, Z.size() ? &Z : nullptr);
       tc.progress = [&tc](int it, double elbo, double s) { progressBar(it, elbo, s, tc); };
-      cm.train(tr.X, tr.y, tc);
+      const TrainReport rep = cm.train(tr.X, tr.y, tc);
       std::fprintf(stderr, "\n");
+      if (rep.diverged) return evalDiverged(which, rep);
     } else {
       cm = loadModel(which);  // a trained model file: no training time
       name = "copa-map-file";
