@@ -70,9 +70,10 @@ TEST(Classifier, ShippedModelsLoadAndReachHeldOutPrecisionRecall) {
     const char* file;
     double precision, recall;
   };
-  // Bounds a little below the figures measured on 500 held-out scenes (README): 0.85/0.82, 0.87/0.85, 0.83/0.71.
+  // Bounds a little below the figures measured on 500 held-out scenes (README table): 0.816/0.854, 0.866/0.848,
+  // 0.832/0.711, 0.809/0.750 (simmix: trained on simulator scenes too).
   for (const Expect& e : {Expect{"leg_adaboost_arras14.yml", 0.78, 0.75}, Expect{"leg_svm_arras14.yml", 0.78, 0.75},
-                          Expect{"leg_svm_stuede5.yml", 0.72, 0.6}}) {
+                          Expect{"leg_svm_stuede5.yml", 0.72, 0.6}, Expect{"leg_adaboost_arras14_simmix.yml", 0.75, 0.68}}) {
     const LegClassifier c = LegClassifier::load(modelPath(e.file));
     const ClassifierMetrics m = c.evaluate(test);
     EXPECT_GT(m.precision(), e.precision) << e.file;

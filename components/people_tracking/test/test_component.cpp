@@ -177,6 +177,7 @@ struct FallbackMountRig {
   std::shared_ptr<cairn::Publisher<sensor_msgs::msg::LaserScan>> scan_pub;
   std::shared_ptr<cairn::Publisher<nav_msgs::msg::Odometry>> odom_pub;
   std::shared_ptr<cairn::Subscription<pmsg::TrackedPersons>> tracks_sub;
+  std::map<int64_t, sensor_msgs::msg::LaserScan> sent;  // by stamp, under heard.mu
   double tf_timeout;
 
   // Loads the component (ASSERTs inside: call through ASSERT_NO_FATAL_FAILURE(rig.start(...))).
@@ -219,7 +220,12 @@ struct FallbackMountRig {
       auto odom = world.odomAt(k * dt);
       odom.header.stamp = stampOf(t);
       odom_pub->publish(odom);
-      scan_pub->publish(toMsg(s));
+      const sensor_msgs::msg::LaserScan msg = toMsg(s);
+      {
+        std::lock_guard l(heard.mu);
+        sent[key(msg.header.stamp)] = msg;
+      }
+      scan_pub->publish(msg);
       waitFor([&] {
         std::lock_guard l(heard.mu);
         return heardAt(heard.tracks, t) != nullptr;
@@ -627,6 +633,12 @@ TEST(PeopleTrackerComponent, DetectorParametersChangeAtRunTime) {
   World world;
   FallbackMountRig rig;
   ASSERT_NO_FATAL_FAILURE(rig.start("people_container8", world, 0.2));
+  std::shared_ptr<cairn::Subscription<sensor_msgs::msg::LaserScan>> masked_sub =
+      rig.sim->create_subscription<sensor_msgs::msg::LaserScan>("scan_filtered", cairn::QoS::sensor_data(), [&](const sensor_msgs::msg::LaserScan& m) {
+        std::lock_guard l(rig.heard.mu);
+        rig.heard.masked[key(m.header.stamp)] = m;
+      });
+  ASSERT_TRUE(waitFor([&] { return masked_sub->publisher_count_inter_process() > 0; }, 20s));
   auto set = rig.sim->create_client<rcl_interfaces::srv::SetParameters_Request, rcl_interfaces::srv::SetParameters_Response>(
       "/people_tracker/set_parameters");
   auto request = [](const std::string& name, const cairn::ParameterValue& v) {
@@ -637,39 +649,65 @@ TEST(PeopleTrackerComponent, DetectorParametersChangeAtRunTime) {
     r.parameters.push_back(p);
     return r;
   };
+  // Phases: mask.people all (default) until scan `unmask`, then none; detector.max_range 0.1 m from `shrink`.
   const double dt = 1.0 / 15.0;
-  const int steps = 60, change = 30;
-  std::optional<rcl_interfaces::srv::SetParameters_Response> bad_choice, read_only, range;
+  const int steps = 75, unmask = 30, shrink = 50;
+  std::optional<rcl_interfaces::srv::SetParameters_Response> bad_choice, read_only, none, range;
   rig.play(world, 500.0, steps, dt, [&](int k, double) {
-    if (k != change) return;
-    bad_choice = set->call(request("mask.people", std::string("everyone")), 10s);
-    read_only = set->call(request("tracker.process_noise", 1.0), 10s);
-    range = set->call(request("detector.max_range", 0.1), 10s);
+    if (k == unmask) {
+      bad_choice = set->call(request("mask.people", std::string("everyone")), 10s);
+      read_only = set->call(request("tracker.process_noise", 1.0), 10s);
+      none = set->call(request("mask.people", std::string("none")), 10s);
+    }
+    if (k == shrink) range = set->call(request("detector.max_range", 0.1), 10s);
   });
   rig.stop();
-  ASSERT_TRUE(bad_choice && read_only && range);
+  ASSERT_TRUE(bad_choice && read_only && none && range);
   ASSERT_EQ(bad_choice->results.size(), 1u);
   EXPECT_FALSE(bad_choice->results[0].successful);
   EXPECT_NE(bad_choice->results[0].reason.find("must be all, guide or none"), std::string::npos) << bad_choice->results[0].reason;
   ASSERT_EQ(read_only->results.size(), 1u);
   EXPECT_FALSE(read_only->results[0].successful);
+  ASSERT_EQ(none->results.size(), 1u);
+  EXPECT_TRUE(none->results[0].successful) << none->results[0].reason;
   ASSERT_EQ(range->results.size(), 1u);
   EXPECT_TRUE(range->results[0].successful) << range->results[0].reason;
   Heard& heard = rig.heard;
   std::lock_guard l(heard.mu);
-  int before = 0, after = 0, processed_after = 0;
+  // Beams with a return in the sent scan that scan_filtered set to NaN.
+  auto maskedBeams = [&](double t) -> int {
+    const auto* out = heardAt(heard.masked, t);
+    const auto* in = heardAt(rig.sent, t);
+    if (!out || !in || out->ranges.size() != in->ranges.size()) return -1;
+    int n = 0;
+    for (std::size_t i = 0; i < in->ranges.size(); ++i) n += std::isfinite(in->ranges[i]) && !std::isfinite(out->ranges[i]);
+    return n;
+  };
+  int tracked = 0, masking = 0, tracked_unmasked = 0, unmasked_beams = 0, after = 0, processed_after = 0;
   for (int k = 15; k < steps; ++k) {
-    const auto* msg = heardAt(heard.tracks, 500.0 + k * dt);
+    const double t = 500.0 + k * dt;
+    const auto* msg = heardAt(heard.tracks, t);
     if (!msg) continue;
     const bool on_a = trackNear(*msg, world.personA(k * dt), 0.35).has_value();
-    if (k < change) before += on_a;
-    if (k >= change + 10) {
+    const int m = maskedBeams(t);  // -1: scan_filtered not heard (best effort)
+    if (k < unmask && on_a && m >= 0) {
+      ++tracked;
+      masking += m > 0;
+    }
+    if (k >= unmask + 1 && k < shrink && on_a && m >= 0) {
+      ++tracked_unmasked;
+      unmasked_beams += m;
+    }
+    if (k >= shrink + 10) {
       after += on_a;
       ++processed_after;
     }
   }
-  EXPECT_GE(before, 12) << "person A tracked before the change";
-  EXPECT_GE(processed_after, 15) << "scans still processed after the change";
+  EXPECT_GE(tracked, 12) << "person A tracked before the changes";
+  EXPECT_GE(masking, tracked - 2) << "mask.people all: A's beams hidden in scan_filtered";
+  EXPECT_GE(tracked_unmasked, 12) << "mask.people none leaves tracking alone";
+  EXPECT_EQ(unmasked_beams, 0) << "mask.people none: scan_filtered is the scan";
+  EXPECT_GE(processed_after, 10) << "scans still processed after the range change";
   EXPECT_EQ(after, 0) << "no legs beyond 0.1 m after the change, so no track on person A";
 }
 

@@ -38,7 +38,12 @@ TEST(Segmentation, ThresholdAdaptsToRange) {
   fixed.jump_base = 0.05;
   fixed.jump_beam_factor = 0.0;
   EXPECT_EQ(segmentScan(s, fixed).size(), 0u);  // every point alone, below min_points
-  EXPECT_EQ(segmentScan(s).size(), 1u);
+  // Same fixed part; only the range term (3 beam spacings = 0.24 m at 8 m) can join the points.
+  SegmentationParams adaptive = fixed;
+  adaptive.jump_beam_factor = 3.0;
+  EXPECT_EQ(segmentScan(s, adaptive).size(), 1u);
+  // At 1 m the same angular spacing is 0.01 m apart: joined by the fixed part alone.
+  EXPECT_EQ(segmentScan(makeScan(40, 0.01, 1.0f), fixed).size(), 1u);
 }
 
 TEST(Segmentation, InvalidBeamsSplitUnlessSingleDropout) {

@@ -88,7 +88,7 @@ void usage() {
   std::puts(
       "usage: cairn people <verb> [options]\n"
       "  train --kind adaboost|svm [--features arras14@1|stuede5@1] [--scenes 1500] [--seed 1] [--groups P] [--data CSV[,CSV]]\n"
-      "        [--min-points N] --out FILE\n"
+      "        [--weak-count N] [--svm-c C] [--svm-gamma G] [--pos-weight W] [--min-points N] --out FILE\n"
       "  eval  --model FILE [--scenes 500] [--seed 1000003] [--groups P] [--data CSV] [--json]\n"
       "  gen-train [--worlds apartment,office,warehouse,open] [--episodes 200] [--seed 1] [--scans-per-episode 6] [--walker-area 5]\n"
       "            [--max-walkers N] [--scene-generator N] -o FILE\n"
@@ -112,9 +112,12 @@ void usage() {
       "             [--heading-drift R] [--scale-error E] [--max-duration S] [--json]");
 }
 
-// Comma-separated list of labelled-cluster CSV files ("" = none).
-std::vector<LabelledCluster> loadData(const std::string& list) {
+// --data: comma-separated list of labelled-cluster CSV files (absent: none; given empty: an error).
+std::vector<LabelledCluster> loadData(const Args& a) {
   std::vector<LabelledCluster> out;
+  if (!a.kv.count("data")) return out;
+  const std::string& list = a.kv.at("data");
+  if (list.empty()) fail("option --data needs at least one file, got ''");
   std::size_t begin = 0;
   while (begin < list.size()) {
     const std::size_t end = std::min(list.find(',', begin), list.size());
@@ -128,8 +131,10 @@ std::vector<LabelledCluster> loadData(const std::string& list) {
 #ifdef CAIRN_PEOPLE_SIM
 int genTrain(const Args& a) {
   SimTrainingParams p;
-  const std::string worlds = a.get("worlds", "");
-  if (!worlds.empty()) p.worlds = splitCommas(worlds);
+  if (a.kv.count("worlds")) {
+    if (a.kv.at("worlds").empty()) fail("option --worlds needs at least one world, got ''");
+    p.worlds = splitCommas(a.kv.at("worlds"));
+  }
   p.episodes = static_cast<int>(toInteger(a, "episodes", p.episodes, 1, 10000000));
   p.seed = static_cast<std::uint64_t>(toInteger(a, "seed", 1, 0, kMaxSeed));
   p.scans_per_episode = static_cast<int>(toInteger(a, "scans-per-episode", p.scans_per_episode, 1, 100000));
@@ -193,8 +198,8 @@ int train(const Args& a) {
   const std::string out = a.get("out", "");
   if (out.empty()) fail("train needs --out FILE");
   LegClassifier::checkWritable(out);  // before the training, not after it
+  const std::vector<LabelledCluster> data = loadData(a);  // a bad file before the scenes are generated
   auto samples = generateLabelledClusters(d);
-  const std::vector<LabelledCluster> data = loadData(a.get("data", ""));
   samples.insert(samples.end(), data.begin(), data.end());
   std::size_t pos = 0;
   for (const auto& s : samples) pos += s.positive;
@@ -211,13 +216,13 @@ int train(const Args& a) {
 int eval(const Args& a) {
   const std::string path = a.get("model", "");
   if (path.empty()) fail("eval needs --model FILE");
-  const LegClassifier c = LegClassifier::load(path);
   TrainingDataParams d;
   d.scenes = static_cast<int>(toInteger(a, "scenes", a.has("data") ? 0 : 500, 0, 10000000));
   d.seed = static_cast<std::uint64_t>(toInteger(a, "seed", 1000003, 0, kMaxSeed));
   d.scene.group_probability = groupProbability(a);
+  const std::vector<LabelledCluster> data = loadData(a);
+  const LegClassifier c = LegClassifier::load(path);
   auto samples = generateLabelledClusters(d);
-  const std::vector<LabelledCluster> data = loadData(a.get("data", ""));
   samples.insert(samples.end(), data.begin(), data.end());
   if (samples.empty()) fail("eval: no samples (--scenes 0 and no --data)");
   const ClassifierMetrics m = c.evaluate(samples);

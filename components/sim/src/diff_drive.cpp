@@ -63,6 +63,7 @@ void DiffDrive::step(double dt, double now, const ClearanceFn& clearance) {
     // allow moves that increase the clearance (so a robot touching an obstacle can back off)
     if (next_clear < r && next_clear <= clearance({pose_.x, pose_.y}, r)) {
       stalled_ = true;
+      ++stall_count_;
       vel_ = {};
       return;
     }

@@ -71,12 +71,15 @@ TEST(Kinematics, StallsAtWalls) {
   EXPECT_LE(robot.pose().x, 2.0 - c.footprint_radius + 1e-9);
   EXPECT_GT(robot.pose().x, 2.0 - c.footprint_radius - 0.02);
   EXPECT_TRUE(robot.stalled());
+  const std::size_t stalls = robot.stallCount();
+  EXPECT_GT(stalls, 100u);  // pushing against the wall for most of the 10 s
   // backing off is allowed
   for (int i = 0; i < 100; ++i, t += 0.01) {
     robot.setCommand({-0.3, 0.0}, t);
     robot.step(0.01, t, &walls);
   }
   EXPECT_FALSE(robot.stalled());
+  EXPECT_EQ(robot.stallCount(), stalls);
   EXPECT_LT(robot.pose().x, 1.6);
 }
 

@@ -1,7 +1,7 @@
 // cairn-sim: command-line front end of the simulator core (`cairn sim <verb> ...`).
 //   cairn-sim check <world>                      validate a world file, print a summary
 //   cairn-sim bench [--world <name|file>]... [--json] [--seconds S] [--repeat N] [--seed N]
-//   cairn-sim run --world <name|file> --duration <s> --seed N --out <dir> [...]
+//   cairn-sim run --world <name|file> --duration <s> [--seed N] --out <dir> [...]
 // Bad input: one line `cairn: <file>:<line>: <what>` on stderr, exit code 2.
 #include <algorithm>
 #include <climits>
@@ -65,6 +65,8 @@ long long integerArg(const std::string& verb, const std::string& option, const s
   return *x;
 }
 constexpr long long kMaxSeed = LLONG_MAX;
+// `run` takes the Simulator component's parameter ranges (its seed: 0–9e15, a launch parameter is a double range).
+constexpr long long kComponentMaxSeed = 9'000'000'000'000'000LL;
 // Longest simulated span of `run` and `people` (about 3 years): keeps step and row counts far from overflow.
 constexpr double kMaxDuration = 1e8;
 
@@ -73,7 +75,7 @@ void usage() {
                "  check <world>                 validate a world (name or YAML file) and print a summary\n"
                "  bench [--world W]... [--json] [--seconds S] [--repeat N] [--seed N]\n"
                "                                ray-casting throughput (720-beam scans/s) vs a naive baseline\n"
-               "  run --world W --duration S --seed N --out DIR [--route NAME|none] [--no-people] [--no-crowd]\n"
+               "  run --world W --duration S [--seed 1] --out DIR [--route NAME|none] [--no-people] [--no-crowd]\n"
                "      [--realtime-factor F] [--route-speed V] [--dwell S] [--fov-deg D] [--resolution-deg D]\n"
                "      [--laser-rate HZ] [--range-max M]\n"
                "                                headless run; writes robot_path.csv, people.csv, scan_digest.txt\n"
@@ -292,7 +294,7 @@ int cmdRun(int argc, char** argv) {
     auto number = [&](double lo, double hi) { return numberArg("run", a, value(), lo, hi); };
     if (a == "--world") world_name = value();
     else if (a == "--duration") duration = number(0.0, kMaxDuration);
-    else if (a == "--seed") cfg.seed = static_cast<std::uint64_t>(integerArg("run", a, value(), 0, kMaxSeed));
+    else if (a == "--seed") cfg.seed = static_cast<std::uint64_t>(integerArg("run", a, value(), 0, kComponentMaxSeed));
     else if (a == "--out") out_dir = value();
     else if (a == "--route") route_name = value();
     else if (a == "--no-people") cfg.people = false;

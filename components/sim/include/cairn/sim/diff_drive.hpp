@@ -2,6 +2,7 @@
 // collision with the static walls; odometry with systematic and random error.
 #pragma once
 
+#include <cstddef>
 #include <functional>
 
 #include "cairn/sim/raycast.hpp"
@@ -56,6 +57,8 @@ class DiffDrive {
   Twist2 velocity() const { return vel_; }
   Twist2 command() const { return cmd_; }
   bool stalled() const { return stalled_; }
+  /// Physics steps stalled since construction (stalled() only tells the last step).
+  std::size_t stallCount() const { return stall_count_; }
   void reset(Pose2 pose);
   const DiffDriveConfig& config() const { return config_; }
   /// Wheel angular velocities (left, right) in rad/s for the current body velocity.
@@ -67,6 +70,7 @@ class DiffDrive {
   Twist2 vel_, cmd_;
   double cmd_stamp_ = 0.0;
   bool stalled_ = false;
+  std::size_t stall_count_ = 0;
 };
 
 /// Exact pose after driving with constant (v, w) for dt from p.
