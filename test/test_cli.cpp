@@ -87,6 +87,21 @@ TEST(Cli, CommandsAgainstARunningContainer) {
   EXPECT_NE(r.output.find("3  /extra"), std::string::npos) << r.output;
   r = run(kCairn + " component unload /demo_container 3");
   EXPECT_EQ(r.exit_code, 0) << r.output;
+  // A namespace without the leading '/' is the same namespace; the remap applies to the node's resolved topic
+  // (it used to be keyed "robot/chatter", so the node stayed on /robot/chatter).
+  r = run(kCairn + " component load /demo_container cairn_demo::Listener --name nsl --namespace robot -r chatter:=/elsewhere");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("as '/robot/nsl'"), std::string::npos) << r.output;
+  r = run(kCairn + " topic info /elsewhere");
+  EXPECT_NE(r.output.find("Subscription count: 1\n  node: /robot/nsl"), std::string::npos) << r.output;
+  r = run(kCairn + " component unload /demo_container 4");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = run(kCairn + " component list /demo_container");
+  EXPECT_EQ(r.output.find("/extra"), std::string::npos) << "unloaded: " << r.output;
+  EXPECT_EQ(r.output.find("/robot/nsl"), std::string::npos) << "unloaded: " << r.output;
+  r = run(kCairn + " component load /demo_container cairn_demo::Listener --namespace 9x");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--namespace: invalid namespace '9x'"), std::string::npos) << r.output;
   r = run(kCairn + " component load /demo_container cairn_demo::Nope");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("unknown component class 'cairn_demo::Nope'"), std::string::npos) << r.output;
@@ -141,6 +156,33 @@ TEST(Cli, CrashedIsolatedComponentIsRespawned) {
   // the non-isolated talker was never affected
   EXPECT_EQ(count(out, "loaded cairn_demo::Talker as /talker into main"), 1) << out;
   EXPECT_EQ(stop(launch), 0);
+}
+
+TEST(Cli, LaunchExitsNonZeroWhenAProcessFailsAndStopsWholeProcessGroups) {
+  // A process that fails (not respawned) makes the launch exit 1 with one line naming it (it always exited 0, so
+  // scripts/demo.sh passed with failing processes); a process's own children are stopped with it (they were left
+  // running, re-parented to init).
+  const std::string tag = "317." + std::to_string(getpid() % 1000);  // a sleep only this test starts
+  const std::string spec = "/tmp/cairn_test_exit_" + std::to_string(getpid()) + ".yaml";
+  {
+    std::ofstream f(spec);
+    f << "processes:\n  - name: fails\n    cmd: [sh, -c, \"exit 3\"]\n"
+         "  - name: fine\n    cmd: [\"true\"]\n"
+         "  - name: group\n    cmd: [sh, -c, \"sleep " << tag << " & wait\"]\n";
+  }
+  auto r = run(kCairn + " launch " + spec + " --duration 2");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("cairn: launch: " + spec + ": 1 failed: process fails exited with code 3\n"), std::string::npos)
+      << r.output;
+  // ([p]: the pattern does not match the shell running pgrep)
+  EXPECT_EQ(run("pgrep -f 'slee[p] " + tag + "'").exit_code, 1) << "the shell's sleep outlived the launch";
+  {
+    std::ofstream f(spec);
+    f << "processes:\n  - name: fine\n    cmd: [\"true\"]\n";
+  }
+  r = run(kCairn + " launch " + spec + " --duration 1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::remove(spec.c_str());
 }
 
 TEST(Cli, InvalidSpecIsRejectedBeforeAnythingStarts) {

@@ -134,6 +134,20 @@ TEST(Container, DuplicateNodeNamesAreRefused) {
   const auto r = mgr.load(cairn::LoadRequest{"cairn_demo::Listener", "same"});
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.error.find("already loaded"), std::string::npos) << r.error;
+  // "robot" and "/robot/" are the namespace /robot: one name, and the second is a duplicate.
+  cairn::LoadRequest a{"cairn_demo::Listener", "same"}, b = a, bad = a;
+  a.node_namespace = "robot";
+  b.node_namespace = "/robot/";
+  bad.node_namespace = "9x";
+  const auto ra = mgr.load(a);
+  ASSERT_TRUE(ra.ok) << ra.error;
+  EXPECT_EQ(ra.full_node_name, "/robot/same");
+  const auto rb = mgr.load(b);
+  EXPECT_FALSE(rb.ok);
+  EXPECT_NE(rb.error.find("already loaded"), std::string::npos) << rb.error;
+  const auto rbad = mgr.load(bad);
+  EXPECT_FALSE(rbad.ok);
+  EXPECT_NE(rbad.error.find("invalid namespace '9x'"), std::string::npos) << rbad.error;
 }
 
 // Like launch validation, a load with a parameter the component does not declare is refused (it used to load,

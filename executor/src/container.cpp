@@ -133,8 +133,16 @@ ComponentManager::~ComponentManager() {
   loaded.clear();  // components are destroyed here, newest last
 }
 
-LoadResult ComponentManager::load(const LoadRequest& given) {
+LoadResult ComponentManager::load(const LoadRequest& requested) {
   LoadResult res;
+  // One spelling of the namespace ("robot" and "/robot/" are "/robot") for names, duplicates and restores.
+  LoadRequest given = requested;
+  try {
+    given.node_namespace = normalize_namespace(requested.node_namespace);
+  } catch (const std::exception& e) {
+    res.error = e.what();
+    return res;
+  }
   LoadRequest req = given;
   if (given.restore_parameters) {
     const std::string name = given.node_name.empty() ? default_node_name(given.class_name) : given.node_name;

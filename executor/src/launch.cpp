@@ -563,23 +563,7 @@ int run_launch_main(int argc, char** argv) {
     return true;
   };
 
-  auto stop_all = [&](std::vector<pid_t> pids) {
-    for (pid_t p : pids)
-      if (p > 0) kill(p, SIGTERM);
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-    for (pid_t p : pids) {
-      if (p <= 0) continue;
-      int st;
-      while (waitpid(p, &st, WNOHANG) == 0) {
-        if (std::chrono::steady_clock::now() > deadline) {
-          kill(p, SIGKILL);
-          waitpid(p, &st, 0);
-          break;
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      }
-    }
-  };
+  auto stop_all = [](const std::vector<pid_t>& pids) { stop_processes(pids); };
 
   std::vector<RunningProcess> procs;
   auto all_pids = [&] {
@@ -624,7 +608,9 @@ int run_launch_main(int argc, char** argv) {
 
   const auto t_end = duration > 0 ? std::chrono::steady_clock::now() + std::chrono::milliseconds(int64_t(duration * 1000))
                                   : std::chrono::steady_clock::time_point::max();
-  int rc_exit = 0;
+  // What ended without being respawned: a container (they run until stopped) or a process that failed. Any of
+  // them makes the launch exit 1, so that a script running a spec (scripts/demo.sh) sees it.
+  std::vector<std::string> failures;
   while (!Executor::signal_received() && std::chrono::steady_clock::now() < t_end) {
     const auto now = std::chrono::steady_clock::now();
     // Respawns whose backoff has passed.
@@ -638,7 +624,14 @@ int run_launch_main(int argc, char** argv) {
         CAIRN_ERROR(log, "respawn of " << rc.name << " failed: " << e.what());
         if (rc.pid <= 0) rc.died(std::chrono::steady_clock::now());  // not even started: try again after the backoff
       }
-      if (!ok) CAIRN_ERROR(log, "container " << rc.name << " could not be restarted");
+      if (!ok && rc.pid > 0) {
+        // Running but without its components: stop it and try again after the next backoff.
+        stop_all({rc.pid});
+        const double d = rc.died(std::chrono::steady_clock::now());
+        CAIRN_ERROR(log, "container " << rc.name << " could not be restarted; trying again in " << d << " s");
+      } else if (!ok) {
+        CAIRN_ERROR(log, "container " << rc.name << " could not be restarted");
+      }
     }
     for (auto& rp : procs) {
       if (rp.pid > 0 || rp.due > now) continue;
@@ -666,6 +659,7 @@ int run_launch_main(int argc, char** argv) {
       const double d = rc.died(std::chrono::steady_clock::now());
       if (d < 0) {
         CAIRN_ERROR(log, "container " << rc.name << " " << describe_wait_status(status) << "; respawn is off");
+        failures.push_back("container " + rc.name + " " + describe_wait_status(status));
       } else {
         CAIRN_ERROR(log, "container " << rc.name << " " << describe_wait_status(status) << "; respawning (restart "
                                       << rc.restarts << ") in " << backoff(d) << " s");
@@ -674,8 +668,12 @@ int run_launch_main(int argc, char** argv) {
     for (auto& rp : procs) {
       if (rp.pid != pid) continue;
       const double d = rp.died(std::chrono::steady_clock::now());
-      if (d < 0) {
+      const bool clean = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+      if (d < 0 && clean) {
         CAIRN_INFO(log, "process " << rp.spec->name << " " << describe_wait_status(status));
+      } else if (d < 0) {
+        CAIRN_ERROR(log, "process " << rp.spec->name << " " << describe_wait_status(status));
+        failures.push_back("process " + rp.spec->name + " " + describe_wait_status(status));
       } else {
         CAIRN_WARN(log, "process " << rp.spec->name << " " << describe_wait_status(status) << "; respawning in "
                                    << backoff(d) << " s");
@@ -684,7 +682,11 @@ int run_launch_main(int argc, char** argv) {
   }
   CAIRN_INFO(log, "stopping");
   stop_all(all_pids());
-  return rc_exit;
+  if (failures.empty()) return 0;
+  std::string what;
+  for (const auto& f : failures) what += (what.empty() ? "" : "; ") + f;
+  std::cerr << "cairn: launch: " << spec.file << ": " << failures.size() << " failed: " << what << "\n";
+  return 1;
 }
 
 }  // namespace cairn

@@ -15,6 +15,7 @@ bool valid_token(const std::string& s) {
   return !s.empty() && !std::isdigit(static_cast<unsigned char>(s[0])) &&
          std::all_of(s.begin(), s.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
 }
+}  // namespace
 
 std::string normalize_namespace(const std::string& ns) {
   std::string out = ns.empty() ? "/" : ns;
@@ -29,6 +30,8 @@ std::string normalize_namespace(const std::string& ns) {
   }
   return out;
 }
+
+namespace {
 
 ParameterValue from_msg(const rcl_interfaces::msg::ParameterValue& m) {
   switch (static_cast<ParameterType>(m.type)) {

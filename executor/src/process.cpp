@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
+#include <thread>
 
 namespace cairn {
 
@@ -38,6 +39,7 @@ pid_t spawn_process(const std::vector<std::string>& argv) {
     _exit(127);
   }
   close(err_pipe[1]);
+  setpgid(pid, pid);  // also here: a stop right after the fork must reach the group (the child may not have run yet)
   int child_errno = 0;
   const ssize_t n = read(err_pipe[0], &child_errno, sizeof child_errno);
   close(err_pipe[0]);
@@ -46,6 +48,32 @@ pid_t spawn_process(const std::vector<std::string>& argv) {
     throw std::runtime_error("cannot start '" + argv[0] + "': " + std::strerror(child_errno));
   }
   return pid;
+}
+
+void stop_processes(const std::vector<pid_t>& pids, std::chrono::milliseconds grace) {
+  // The whole group: a child's own children (a shell's commands) go too, not re-parented to init.
+  auto signal_group = [](pid_t p, int sig) {
+    if (kill(-p, sig) != 0) kill(p, sig);  // not (yet) a group leader: the process itself
+  };
+  for (pid_t p : pids)
+    if (p > 0) signal_group(p, SIGTERM);
+  const auto deadline = std::chrono::steady_clock::now() + grace;
+  for (pid_t p : pids) {
+    if (p <= 0) continue;
+    int st;
+    while (waitpid(p, &st, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() > deadline) {
+        signal_group(p, SIGKILL);
+        waitpid(p, &st, 0);
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    // Members of its group that outlived it (not our children: polled, not reaped) get the rest of the grace.
+    while (kill(-p, 0) == 0 && std::chrono::steady_clock::now() <= deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    kill(-p, SIGKILL);
+  }
 }
 
 std::string self_executable() {

@@ -397,7 +397,11 @@ int component_main(int argc, char** argv) {
     LoadNode_Request req;
     req.plugin_name = a.pos[1];
     req.node_name = a.get("--name").value_or("");
-    req.node_namespace = a.get("--namespace").value_or("/");
+    try {
+      req.node_namespace = cairn::normalize_namespace(a.get("--namespace").value_or("/"));  // "robot" = "/robot"
+    } catch (const cairn::NodeError& e) {
+      throw UsageError(std::string("--namespace: ") + e.what());
+    }
     if (auto it = a.opt.find("-p"); it != a.opt.end()) {
       for (const auto& kv : it->second) {
         const auto p = kv.find(":=");

@@ -45,6 +45,9 @@ class NodeError : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+/// "robot", "/robot/", "" -> "/robot", "/robot", "/"; throws NodeError for an invalid token ("/9x", "/a b").
+std::string normalize_namespace(const std::string& ns);
+
 class Node {
  public:
   explicit Node(const NodeOptions& opts);
