@@ -92,6 +92,13 @@ TEST(LaunchSpec, DuplicateNames) {
                      "      - class: cairn_demo::Talker\n"),
             "spec.yaml:5: component: duplicate node name '/talker'");
   EXPECT_EQ(error_of("containers:\n  - name: c\n  - name: c\n"), "spec.yaml:3: container.name: duplicate name 'c'");
+  // A container is a node too: a component of the same name would be a second /talker.
+  EXPECT_EQ(error_of("containers:\n  - name: talker\n    components:\n      - class: cairn_demo::Talker\n"),
+            "spec.yaml:4: component: node name '/talker' is also container talker's node name");
+  // An isolated component runs in container <container>__<name>, which must not be a declared container.
+  EXPECT_EQ(error_of("containers:\n  - name: a__b\n  - name: a\n    components:\n"
+                     "      - class: cairn_demo::Talker\n        name: b\n        isolated: true\n"),
+            "spec.yaml:5: component: isolated, it runs in container 'a__b', a name that is already taken");
 }
 
 // A repeated key used to be accepted with the second entry silently ignored (yaml-cpp finds only the first).
@@ -102,6 +109,9 @@ TEST(LaunchSpec, RepeatedKeys) {
             "spec.yaml:5: component.params: duplicate key 'rate_hz'");
   EXPECT_EQ(error_of("containers:\n  - name: c\n    threads: 2\n    threads: 3\n"),
             "spec.yaml:4: container: duplicate key 'threads'");
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
+                     "        qos: {chatter: {depth: 5, depth: 7}}\n"),
+            "spec.yaml:5: qos.chatter: duplicate key 'depth'");
 }
 
 TEST(LaunchSpec, RemappingThatJoinsTwoMessageTypes) {
@@ -219,4 +229,13 @@ TEST(LaunchSpec, ParameterFiles) {
   EXPECT_NE(err("other.yaml").find("other.yaml' has no entry for /talker (its keys: /other;"), std::string::npos)
       << err("other.yaml");
   EXPECT_EQ(err("shared.yaml"), "") << "/** applies to every node";
+  // A repeated key in the file: the second value was silently ignored.
+  std::ofstream(dir + "/twice.yaml") << "/talker:\n  ros__parameters:\n    rate_hz: 1.0\n    rate_hz: 2.0\n";
+  EXPECT_EQ(err("twice.yaml"), dir + "/twice.yaml:4: /talker.ros__parameters: duplicate key 'rate_hz'");
+  // A parameter the component does not declare, from the file, is refused like an inline one.
+  std::ofstream(dir + "/unknown.yaml") << "/talker:\n  ros__parameters:\n    bogus: 1\n";
+  auto with_unknown = cairn::parse_launch_spec_text(
+      "containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n        params_file: unknown.yaml\n",
+      dir + "/spec.yaml");
+  EXPECT_THROW(cairn::validate_launch_spec(with_unknown, loader), cairn::LaunchError);
 }

@@ -101,6 +101,18 @@ class SpecParser {
       for (const auto& p : ps) spec.processes.push_back(process(p, names));
     }
     if (spec.containers.empty() && spec.processes.empty()) fail(root, "spec: nothing to launch (no containers, no processes)");
+    // Every container is a node (/<name>), and an isolated component runs in a container <container>__<name>:
+    // neither may take a name that something else has.
+    for (const auto& c : spec.containers)
+      for (const auto& comp : c.components) {
+        for (const auto& other : spec.containers)
+          if (comp.fqn() == "/" + other.name)
+            throw LaunchError(file_, comp.line, "component: node name '" + comp.fqn() + "' is also container " +
+                                                    other.name + "'s node name");
+        if (comp.isolated && !names.insert(c.name + "__" + comp.name).second)
+          throw LaunchError(file_, comp.line, "component: isolated, it runs in container '" + c.name + "__" +
+                                                  comp.name + "', a name that is already taken");
+      }
     return spec;
   }
 
@@ -168,6 +180,7 @@ class SpecParser {
       for (const auto& kv : q) {
         const std::string topic = kv.first.as<std::string>();
         if (!kv.second.IsMap()) fail(kv.second, "qos." + topic + ": expected a map");
+        unique_keys(kv.second, "qos." + topic);
         QoSOverride o;
         for (const auto& f : kv.second) {
           const std::string key = f.first.as<std::string>();
@@ -231,8 +244,11 @@ class SpecParser {
       matched = true;
       const auto rp = kv.second["ros__parameters"];
       if (!rp || !rp.IsMap()) throw LaunchError(pfile, line_of(kv.second), node + ": expected ros__parameters: {name: value}");
+      std::set<std::string> seen;
       for (const auto& p : rp) {
         const std::string k = p.first.as<std::string>();
+        if (!seen.insert(k).second)  // yaml-cpp keeps both; the second would be silently ignored
+          throw LaunchError(pfile, line_of(p.first), node + ".ros__parameters: duplicate key '" + k + "'");
         if (c.params.count(k)) continue;
         try {
           c.params[k] = parameter_from_yaml(p.second);
