@@ -222,6 +222,11 @@ TEST(Cli, BadOptionValuesAreOneLineErrorsBeforeAnythingStarts) {
       {"topic hz /chatter --duration -1", "cairn: topic: --duration expects a number in [0, 1e+09], got '-1'"},
       {"topic list --wait -1", "cairn: topic: --wait expects a number in [0, 3600], got '-1'"},
       {"topic echo /chatter extra", "cairn: topic: unexpected argument 'extra' (topic echo <topic>) (see cairn --help)"},
+      // each topic verb takes its own options only (echo --duration used to be accepted and ignored)
+      {"topic echo /chatter --duration 5", "cairn: topic: unknown option '--duration' (see cairn --help)"},
+      {"topic list --count 5", "cairn: topic: unknown option '--count' (see cairn --help)"},
+      {"topic hz /chatter --once", "cairn: topic: unknown option '--once' (see cairn --help)"},
+      {"topic list -t", "cairn: topic: unknown option '-t' (see cairn --help)"},
       {"param set /talker rate_hz 20 extra",
        "cairn: param: unexpected argument 'extra' (param set <node> <name> <value>; quote a value with spaces) (see "
        "cairn --help)"},
@@ -235,6 +240,12 @@ TEST(Cli, BadOptionValuesAreOneLineErrorsBeforeAnythingStarts) {
     const auto r = run(kCairn + " " + args);
     EXPECT_EQ(r.exit_code, 2) << args << ": " << r.output;
     EXPECT_EQ(r.output, err + "\n") << args;
+  }
+  // --help after a built-in verb prints the usage (it was "unknown command", exit 2)
+  for (const char* args : {"topic --help", "topic echo -h", "node --help", "component load --help", "param --help"}) {
+    const auto r = run(kCairn + " " + args);
+    EXPECT_EQ(r.exit_code, 0) << args << ": " << r.output;
+    EXPECT_EQ(r.output.rfind("usage: cairn <command>", 0), 0u) << args << ": " << r.output;
   }
 }
 
@@ -254,11 +265,16 @@ TEST(BenchIpc, RuntimeCasesRunAndLoseNothing) {
   r = run(kCairn + " bench ipc --quick --only idle 2>&1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_GE(field(r.output, "timer_expiries"), 15) << r.output;
-  EXPECT_GE(field(r.output, "wakeups"), 0) << r.output;
+  // Nothing due: the executor sleeps (no polling: a 10 ms poll would wake it 100 times a second, more often than
+  // the 10 Hz timer it then gets). The measured figure is 0 (docs/benchmarks.md); the bound leaves room for stray
+  // wake-ups on a loaded machine.
+  EXPECT_LT(field(r.output, "wakeups"), field(r.output, "timer_expiries") / 2) << r.output;
   r = run(kCairn + " bench ipc --quick --only component_load 2>&1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(r.output.find("\"error\""), std::string::npos) << r.output;
-  EXPECT_EQ(field(r.output, "loads"), 20) << r.output;
+  EXPECT_EQ(field(r.output, "loads"), 20) << r.output;  // --quick's iterations: every load succeeded
+  EXPECT_GT(field(r.output, "p50_ms"), 0) << r.output;
+  EXPECT_LE(field(r.output, "p50_ms"), field(r.output, "max_ms")) << r.output;
   r = run(kCairn + " bench ipc --quick --only respawn 2>&1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(r.output.find("\"error\""), std::string::npos) << r.output;

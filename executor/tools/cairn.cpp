@@ -42,6 +42,7 @@ Runtime (graph discovered through DDS built-in topics; non-cairn DDS participant
                                        print messages as YAML-like text
   topic hz <topic> [--duration S]      message rate (printed every second)
   topic info <topic>                   type, publishers and subscriptions with node and QoS
+                                       (topic verbs also take --wait S; each refuses the others' options)
   node list                            nodes (and non-cairn DDS participants)
   component list [container]           components loaded in containers
   component types                      component classes that can be loaded
@@ -52,11 +53,12 @@ Runtime (graph discovered through DDS built-in topics; non-cairn DDS participant
   param dump <node>                    all parameters as YAML
   launch <spec.yaml> [--duration S] [--check]
                                        validate the whole spec, then start and supervise it
-  container --name N [--threads K]     a component container process (K in 1-64, as in launch specs)
+  container --name N [--threads K] [--load-timeout S]
+                                       a component container process (K in 1-64, S in 0.1-3600 s, as in launch specs)
   bench ipc [--quick] [--only CASE]    intra-process and DDS latency/throughput, executor dispatch CPU and idle
-                                       wake-ups, component load time, crash-to-serving time, each vs a baseline
-                                       (JSON lines; CASE: same_thread cross_thread dds_rtt dds_throughput
-                                       dispatch idle component_load respawn)
+                                       wake-ups, component load time, crash-to-serving time, local latency with a
+                                       remote subscriber, each vs a baseline (JSON lines; CASE: same_thread
+                                       cross_thread dds_rtt dds_throughput dispatch idle component_load respawn mixed)
 
 Component tools (run as cairn-<verb>):
   slam optimize <in.g2o> ...           pose-graph optimization (components/graph_slam)
@@ -65,12 +67,15 @@ Component tools (run as cairn-<verb>):
                                        Kuemmerle et al. relations metric, corrected-log ATE (JSON with --json)
   slam params | train-verifier | eval-verifier
                                        SLAM parameter table; loop-closure verifier training / evaluation
-  sim bench --world <name> --json      simulator speed (components/sim)
-  log play <file.clf|.bz2|.gz> [--rate R] [--pace consumers] [--limit N] [--skip-malformed] [--print]
-                                       CARMEN log -> scan, odom, /tf, /clock over DDS (components/sim)
-  people ...                           people detection and tracking (components/people_tracking)
-  copa ...                             CoPA-Map people-activity model (components/copa_map)
-  bt run <file.xml> ...                behavior trees (components/bt_executive)
+  sim check | bench | run | people      world summary, simulator speed, a headless run to files, recorded people
+                                       (components/sim; cairn sim --help)
+  log info | play <file.clf|.bz2|.gz>  CARMEN log summary; playback -> scan, odom, /tf, /clock over DDS
+                                       (components/sim; cairn log --help)
+  people train | eval | gen-train | bench | mask-bench
+                                       people detection and tracking (components/people_tracking; cairn people --help)
+  copa train | eval | predict | render CoPA-Map people-activity model (components/copa_map; cairn copa --help)
+  bt run | replay | watch | model | psbt-eval
+                                       behavior trees (components/bt_executive; cairn bt --help)
 
 Common options: --wait S (topic, node: discovery time, 0-3600 s, default 1.5 s; topic echo/hz: time to find a
 publisher, component: time to find the container(s), default 5 s), --timeout S (param, component: time for the
@@ -529,15 +534,25 @@ int main(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const std::string verb = argv[1];
+  const bool builtin = verb == "topic" || verb == "node" || verb == "component" || verb == "param";
+  for (int i = 2; builtin && i < argc; ++i) {
+    if (std::string(argv[i]) == "-h" || std::string(argv[i]) == "--help") {
+      std::cout << kHelp;
+      return 0;
+    }
+  }
   try {
     if (verb == "topic") {
       if (argc < 3) throw UsageError("topic list|echo|hz|info");
       const std::string sub = argv[2];
-      const Args a = parse_args(argc, argv, 3, {"--count", "--duration", "--wait"}, {"--once", "-t"});
-      if (sub == "list") return topic_list(a);
-      if (sub == "echo") return topic_echo(a);
-      if (sub == "hz") return topic_hz(a);
-      if (sub == "info") return topic_info(a);
+      // Each subcommand its own options: one shared set let `echo --duration 5` run forever.
+      auto args = [&](const std::set<std::string>& with_value, const std::set<std::string>& flags) {
+        return parse_args(argc, argv, 3, with_value, flags);
+      };
+      if (sub == "list") return topic_list(args({"--wait"}, {}));
+      if (sub == "echo") return topic_echo(args({"--count", "--wait"}, {"--once"}));
+      if (sub == "hz") return topic_hz(args({"--duration", "--wait"}, {}));
+      if (sub == "info") return topic_info(args({"--wait"}, {}));
       throw UsageError("unknown topic command '" + sub + "'");
     }
     if (verb == "node") {
