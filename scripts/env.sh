@@ -3,3 +3,7 @@ export CYCLONEDDS_URI="${CYCLONEDDS_URI:-<CycloneDDS><Domain Id=\"any\"><General
 export CAIRN_DOMAIN_ID="${CAIRN_DOMAIN_ID:-$(( (RANDOM % 200) + 20 ))}"
 _cairn_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 export PATH="$_cairn_root/build/bin:$PATH"
+# Other shells reach this one's nodes only on the same domain: say which (interactive shells only).
+if [[ $- == *i* ]]; then
+  echo "cairn: DDS domain $CAIRN_DOMAIN_ID (in another shell: export CAIRN_DOMAIN_ID=$CAIRN_DOMAIN_ID; source scripts/env.sh)" >&2
+fi

@@ -1330,6 +1330,9 @@ class ExecutiveNode : public cairn::Node {
     const int poll_ms = declare_parameter<int>("monitor.poll_ms", 200, D{"container list period and restart steps", 10, 60000, true});
     const int live_warn = declare_parameter<int>("monitor.liveness_warn_ms", 1000, D{"not listed for this long: warning", 1, 3600000, true});
     const int live_err = declare_parameter<int>("monitor.liveness_error_ms", 2000, D{"not listed for this long: error", 1, 3600000, true});
+    if (live_warn > live_err)  // as the process and clock monitors: warn <= error
+      throw std::invalid_argument("monitor.liveness_warn_ms (" + std::to_string(live_warn) +
+                                  ") must not exceed monitor.liveness_error_ms (" + std::to_string(live_err) + ")");
     const int nav_failures = declare_parameter<int>(
         "monitor.navigation_failures", 0, D{"NavigateTo failures in a row that are a navigation error (0: no monitor)", 0, 1000, true});
     const std::string alert_topic = declare_parameter<std::string>("monitor.alert_topic", "bt/alerts", D{"alerts (std_msgs/String)", {}, {}, true});

@@ -759,6 +759,8 @@ TEST(BtComponentLaunch, BadServiceRequestAndMonitorSpecsFailValidation) {
   EXPECT_EQ(e, "spec.yaml:4: cairn_bt::ExecutiveNode (/executive) cannot be constructed: monitor.processes[0]: expected "
                "'<container> <cpu_warn_%> <cpu_error_%> <ram_warn_mb> <ram_error_mb>' (positive, warn <= error), got "
                "'main 90 80 100 200'");
+  e = launchError("{monitor.liveness_warn_ms: 3000, monitor.liveness_error_ms: 2000}");  // was accepted
+  EXPECT_NE(e.find("monitor.liveness_warn_ms (3000) must not exceed monitor.liveness_error_ms (2000)"), std::string::npos) << e;
   e = launchError("{monitor.clocks: ['/peer/clock std_msgs/Header 10']}");
   EXPECT_NE(e.find("monitor.clocks[0]: expected '<topic> <type> <warn_ms> <error_ms>' (0 < warn <= error)"), std::string::npos) << e;
   e = launchError("{monitor.clocks: ['/peer/clock std_msgs/Nope 10 20']}");
