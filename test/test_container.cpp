@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <mutex>
 #include <thread>
 
 #include "cairn/container.hpp"
@@ -13,6 +14,7 @@
 #include "composition_interfaces/srv/UnloadNode.hpp"
 #include "cairn/parameter_msgs.hpp"
 #include "rcl_interfaces/srv/GetParameters.hpp"
+#include "std_msgs/msg/String.hpp"
 
 using namespace std::chrono_literals;
 using namespace composition_interfaces::srv;
@@ -216,6 +218,18 @@ TEST(Container, RestartRestoresTheOriginalLaunchParameters) {
   EXPECT_EQ(t->get_parameter<double>("rate_hz"), 42.0);
   EXPECT_EQ(t->get_parameter<std::string>("text"), "restarted");
   EXPECT_EQ(mgr.remembered("/robot/talker")->remaps.at("/robot/chatter"), "/speech");
+  // ... and the restored node behaves so: it publishes on the remapped /speech with the overriding text (heard over
+  // DDS from the client's context).
+  std::mutex mu;
+  std::string heard;
+  auto speech = cli.create_subscription<std_msgs::msg::String>("/speech", cairn::QoS{}, [&](const std_msgs::msg::String& m) {
+    std::lock_guard l(mu);
+    heard = m.data;
+  });
+  EXPECT_TRUE(client.exec.spin_until([&] {
+    std::lock_guard l(mu);
+    return heard.rfind("restarted: ", 0) == 0;
+  }, 20s)) << "heard on /speech: '" << heard << "'";
 
   req.node_name = "never_loaded";
   auto none = load->call(req, 20s);
