@@ -108,3 +108,11 @@ bad_trace(neg "${hdr}E 1 -5 0 IDLE RUNNING\n" ":3: negative time -5")
 bad_trace(negstep "${hdr}E -1 0 0 IDLE RUNNING\n" ":3: bad event record")
 file(WRITE bt_cli_neg.xml "<root BTCPP_format=\"4\" main_tree_to_execute=\"M\">\n<BehaviorTree ID=\"M\">\n  <Sleep msec=\"-5\"/>\n</BehaviorTree>\n</root>\n")
 bad_bt("bt_cli_neg.xml:3: port 'msec' must not be negative, got -5" run bt_cli_neg.xml)
+
+# --help after a verb prints the usage (replay took "--help" for its trace file).
+foreach(verb run replay watch model psbt-eval)
+  run_bt(0 out err ${verb} --help)
+  if(NOT out MATCHES "^usage: cairn bt run")
+    message(FATAL_ERROR "${verb} --help: ${out} ${err}")
+  endif()
+endforeach()

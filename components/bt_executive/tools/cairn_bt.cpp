@@ -41,15 +41,18 @@ using namespace cairn::bt;
 
 namespace {
 
+constexpr const char* kUsage =
+    "usage: cairn bt run <file.xml> [--tree ID] [--max-ticks N] [--period-ms P] [--trace] [--log FILE] "
+    "[--no-wait]\n"
+    "       cairn bt replay <trace.log>\n"
+    "       cairn bt watch <trace.log> [--follow] [--interval-ms N]\n"
+    "       cairn bt watch --topic [NAME=/bt/status] [--count N | --once] [--timeout S (0-86400, 0: forever)]\n"
+    "       cairn bt model\n"
+    "       cairn bt psbt-eval [--starts 1-100000] [--seed S] [--n-pl 1-10] [--hotspots 0-1000] [--xml FILE]\n"
+    "       cairn bt <verb> --help\n";
+
 int usage() {
-  std::fprintf(stderr,
-               "usage: cairn bt run <file.xml> [--tree ID] [--max-ticks N] [--period-ms P] [--trace] [--log FILE] "
-               "[--no-wait]\n"
-               "       cairn bt replay <trace.log>\n"
-               "       cairn bt watch <trace.log> [--follow] [--interval-ms N]\n"
-               "       cairn bt watch --topic [NAME=/bt/status] [--count N | --once] [--timeout S (0-86400, 0: forever)]\n"
-               "       cairn bt model\n"
-               "       cairn bt psbt-eval [--starts 1-100000] [--seed S] [--n-pl 1-10] [--hotspots 0-1000] [--xml FILE]\n");
+  std::fputs(kUsage, stderr);
   return 2;
 }
 
@@ -423,6 +426,12 @@ int cmdPsbtEval(int argc, char** argv) {
 int main(int argc, char** argv) {
   if (argc < 2) return usage();
   const std::string verb = argv[1];
+  const bool known = verb == "run" || verb == "replay" || verb == "watch" || verb == "psbt-eval" || verb == "model";
+  if (known && argc > 2 && (std::strcmp(argv[2], "-h") == 0 || std::strcmp(argv[2], "--help") == 0)) {
+    // `cairn bt replay --help` took "--help" for the trace file
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
   try {
     if (verb == "run") return cmdRun(argc - 2, argv + 2);
     if (verb == "replay") return cmdReplay(argc - 2, argv + 2);
@@ -435,7 +444,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (verb == "-h" || verb == "--help" || verb == "help") {
-      usage();
+      std::fputs(kUsage, stdout);
       return 0;
     }
   } catch (const UsageError& e) {
