@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Installs every Debian package cairn needs to build, test and run. Idempotent: packages that are
-# already installed are skipped, so a second run does no apt work at all.
+# already installed are skipped, so a second run does no apt work at all. (libpcl-dev is not listed: no code
+# uses PCL yet, and it pulls in VTK and Qt on a fresh machine; add it with the first find_package(PCL).)
 set -euo pipefail
 PKGS=(
-  build-essential cmake ninja-build pkg-config ccache git
+  build-essential cmake ninja-build pkg-config ccache git python3
   cyclonedds-dev cyclonedds-tools
-  libeigen3-dev libsuitesparse-dev libceres-dev libopencv-dev libpcl-dev
+  libeigen3-dev libsuitesparse-dev libceres-dev libopencv-dev
   libyaml-cpp-dev libtinyxml2-dev liburdfdom-dev liburdfdom-headers-dev libbz2-dev libpng-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   colcon python3-colcon-cmake python3-colcon-test-result python3-colcon-package-selection

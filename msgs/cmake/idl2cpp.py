@@ -144,6 +144,10 @@ class Parser:
                     fields.append(self.field())
                 if not fields:
                     self.err(f"empty struct '{name}' (CDR needs at least one member; ROS 2 adds a uint8)")
+                if [f['name'] for f in fields] == ['request_header']:
+                    # an empty ROS 2 request/reply: rosidl serializes its placeholder byte after the rmw header
+                    self.err(f"'{name}' holds only the request header: an empty ROS 2 service message needs "
+                             "'uint8 structure_needs_at_least_one_member;' after it (rosidl puts that byte on the wire)")
                 self.expect('}')
                 self.expect(';')
                 self.structs.append((scope, name, fields))

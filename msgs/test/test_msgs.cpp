@@ -2,9 +2,12 @@
 
 #include <cstring>
 
+#include "composition_interfaces/srv/ListNodes.h"
+#include "composition_interfaces/srv/ListNodes.hpp"
 #include "dds/dds.h"
 #include "geometry_msgs/msg/Quaternion.hpp"
 #include "nav_msgs/msg/Odometry.hpp"
+#include "rcl_interfaces/srv/ListParameters.hpp"
 #include "sensor_msgs/msg/LaserScan.h"
 #include "sensor_msgs/msg/LaserScan.hpp"
 #include "sensor_msgs/msg/PointField.hpp"
@@ -27,6 +30,16 @@ TEST(Msgs, DefaultsAndConstantsComeFromIdl) {
   EXPECT_EQ(q.w, 1.0);
   EXPECT_EQ(q.x, 0.0);
   EXPECT_EQ(sensor_msgs::msg::PointField_Constants::FLOAT32, 7);
+  EXPECT_EQ(rcl_interfaces::srv::ListParameters_Request_Constants::DEPTH_RECURSIVE, 0u);
+}
+
+// ROS 2's ListNodes request is empty, so rosidl gives it a placeholder uint8 that is on the wire after the rmw
+// header; without it a request from cairn is one byte short for a ROS 2 container.
+TEST(Msgs, EmptyRos2RequestCarriesThePlaceholderByte) {
+  composition_interfaces::srv::ListNodes_Request r;
+  EXPECT_EQ(r.structure_needs_at_least_one_member, 0);
+  EXPECT_GT(sizeof(composition_interfaces_srv_dds__ListNodes_Request_),
+            sizeof(cairn_interfaces_msg_dds__RequestHeader_));
 }
 
 TEST(Msgs, LaserScanToCBorrowsBuffersAndRoundTrips) {

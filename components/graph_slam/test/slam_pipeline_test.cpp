@@ -574,7 +574,7 @@ TEST(SlamParams, TableSetsTypedValuesAndRejectsBadOnes) {
 TEST(SlamTool, RunOnAnAcesExcerptMeetsTheRelationsBound) {
   const std::string log = std::string(CAIRN_SOURCE_ROOT) + "/../shared/data/slam_logs_carmen/radish/aces.clf.bz2";
   const std::string rel = std::string(CAIRN_SOURCE_ROOT) + "/../shared/data/slam_logs_carmen/radish/aces.relations";
-  if (!fs::exists(log)) GTEST_SKIP() << "shared data not present: " << log;
+  if (!fs::exists(log) || !fs::exists(rel)) GTEST_SKIP() << "shared data not present: " << log << ", " << rel;
   const fs::path d = tempDir("aces");
   std::string out;
   ASSERT_EQ(runTool("run --carmen " + log + " --out " + d.string() + " --limit 1200 --quiet --json", out), 0) << out;
