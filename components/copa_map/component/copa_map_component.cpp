@@ -418,7 +418,10 @@ class CopaMapNode : public cairn::Node {
       return;
     }
     try {
-      rs.expected_count = model->expectedCount(rq.x1_min, rq.x1_max, rq.x2_min, rq.x2_max, t0, t1, spc);
+      // The model's rates are per rate_unit seconds and its time axis is in bins of τ: the core integrates rate ×
+      // bins, so τ / rate_unit makes it a count (§4.2.5 writes m_y per τ; equal when τ = rate_unit, as with ATC).
+      rs.expected_count = model->expectedCount(rq.x1_min, rq.x1_max, rq.x2_min, rq.x2_max, t0, t1, spc) *
+                          gc_.time_bin / gc_.rate_unit;
       rs.success = true;
     } catch (const std::invalid_argument& e) {
       rs.message = e.what();

@@ -77,7 +77,15 @@ void Gridifier::creditDuration(double t0, double t1, const std::vector<int>& cel
     const double seg_end = std::min(t1, bin_end);
     if (b >= emitted_up_to_) {
       BinMap& bm = bins_[b];
-      for (int c : cells) bm[c].duration += seg_end - t0;
+      for (int c : cells) {
+        Accumulator& acc = bm[c];
+        acc.duration += seg_end - t0;
+        if (!acc.seen.empty() && acc.seen.back().second >= t0) {
+          acc.seen.back().second = seg_end;  // contiguous with the last stretch
+        } else {
+          acc.seen.emplace_back(t0, seg_end);
+        }
+      }
     }
     t0 = seg_end;
   }
@@ -112,7 +120,23 @@ void Gridifier::addDetection(double t, double x, double y) {
     ++stats_.detections_late;
     return;
   }
-  bins_[b][iy * config_.nx + ix].count += 1.0;
+  const int idx = iy * config_.nx + ix;
+  bool seen = have_pose_ && t >= last_t_ && t <= last_t_ + config_.max_pose_gap &&
+              std::binary_search(last_visible_.begin(), last_visible_.end(), idx);  // the stretch not yet credited
+  auto bin = bins_.find(b);
+  Accumulator* acc = nullptr;
+  if (bin != bins_.end()) {
+    auto cell = bin->second.find(idx);
+    if (cell != bin->second.end()) acc = &cell->second;
+  }
+  if (!seen && acc)
+    for (const auto& [from, to] : acc->seen) seen = seen || (t >= from && t < to);  // [from, to): at `to` it moved
+  if (!seen) {
+    ++stats_.detections_unobserved;
+    return;
+  }
+  if (!acc) acc = &bins_[b][idx];
+  acc->count += 1.0;
 }
 
 void Gridifier::emitBin(std::int64_t bin, BinMap& cells, std::vector<GridCell>& out) {

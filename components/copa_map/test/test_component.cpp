@@ -229,7 +229,8 @@ TEST(CopaMapComponent, ServesTheLoadedModelOverDdsLikeTheCore) {
   const auto cs = remote.count->call(cq, 30s);
   ASSERT_TRUE(cs.has_value());
   ASSERT_TRUE(cs->success) << cs->message;
-  EXPECT_DOUBLE_EQ(cs->expected_count, n_expect);
+  // The core integrates rates (per hour) over bins of τ = 60 s: a count needs τ / rate_unit (it was 60x too high).
+  EXPECT_DOUBLE_EQ(cs->expected_count, n_expect * tau / 3600.0);
   EXPECT_GT(n_expect, 0.0);
 
   // Bad requests: an error reply, and the component keeps serving.

@@ -145,6 +145,32 @@ TEST(CopaGridifier, MinimumDurationDropsBrieflySeenCells) {
   EXPECT_EQ(g.stats().detections_unobserved, 1u);
 }
 
+// Counts and durations come from the same field of view (Stüde §4.2.2): a person standing in a cell the whole bin,
+// tracked from beyond fov_radius, counts only while the cell is seen. Before, all 100 detections counted against
+// 30 s of observation: a rate 3.3x too high.
+TEST(CopaGridifier, DetectionsCountOnlyWhileTheirCellIsInView) {
+  Gridifier g(smallGrid(), nullptr);
+  int streamed = 0;
+  for (int k = 0; k < 100; ++k) {  // streaming, as the component: each second the pose, then the detection
+    const double t = k;
+    g.addPose(t, k < 30 ? 3.5 : 8.5, 4.5);  // next to cell (3, 4) for 30 s, then 5 m away
+    g.addDetection(t, 3.5, 4.5);
+    ++streamed;
+  }
+  auto b0 = byCell(g.finish(), 0);
+  ASSERT_TRUE(b0.count(std::make_pair(3, 4)));
+  EXPECT_NEAR(b0[std::make_pair(3, 4)].duration, 30.0, 1e-9);
+  EXPECT_DOUBLE_EQ(b0[std::make_pair(3, 4)].count, 30.0);  // t = 0 .. 29
+  EXPECT_NEAR(b0[std::make_pair(3, 4)].rate, 1.0, 1e-12);   // one per second while seen
+  EXPECT_EQ(g.stats().detections_unobserved, static_cast<std::uint64_t>(streamed - 30));
+  // The same when the detections come after all poses (a batch): the credited intervals decide.
+  Gridifier batch(smallGrid(), nullptr);
+  for (int k = 0; k < 100; ++k) batch.addPose(k, k < 30 ? 3.5 : 8.5, 4.5);
+  for (int k = 0; k < 100; ++k) batch.addDetection(k, 3.5, 4.5);
+  auto c0 = byCell(batch.finish(), 0);
+  EXPECT_DOUBLE_EQ(c0[std::make_pair(3, 4)].count, 30.0);  // t = 0 .. 29: seen in [0, 30)
+}
+
 TEST(CopaGridifier, StreamingMemoryIsBounded) {
   // A robot driving back and forth for 50 bins: open entries never exceed one or two bins' worth of cells.
   auto cfg = smallGrid();

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace cairn::copa_map {
@@ -73,7 +74,9 @@ class Gridifier {
 
   // Robot position at time t (non-decreasing; a pose is held until the next one, at most max_pose_gap).
   void addPose(double t, double x, double y);
-  // A people detection at (x, y) and time t (map frame).
+  // A people detection at (x, y) and time t (map frame). It is counted only if its cell was in the field of view at
+  // t: within a credited visibility interval, or visible from the latest pose (t no more than max_pose_gap after it);
+  // otherwise it is unobserved (a tracker that sees beyond fov_radius must not inflate c_i against Δ_i).
   void addDetection(double t, double x, double y);
   // Emits all bins that end at or before min(t, last pose time); their memory is released.
   std::vector<GridCell> flush(double t);
@@ -91,6 +94,9 @@ class Gridifier {
   struct Accumulator {
     double count = 0;
     double duration = 0;
+    // When the cell was in the field of view within this bin: merged [from, to] intervals (one per uninterrupted
+    // stretch). A detection counts only at a time the cell was seen (Stüde §4.2.2: c_i and Δ_i of the visible cell).
+    std::vector<std::pair<double, double>> seen;
   };
   using BinMap = std::unordered_map<int, Accumulator>;
   void creditDuration(double t0, double t1, const std::vector<int>& cells);
