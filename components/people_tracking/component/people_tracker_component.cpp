@@ -628,7 +628,9 @@ class PeopleTracker : public cairn::Node {
     last_tracks_ = tracker_->outputTracks();
     last_sensor_ = sensor;
     last_stamp_ = scan.stamp;
-    const pt::GuideStatus gs = guide_->update(last_tracks_, sensor, scan.stamp);
+    // The guide tracker sees every track, coasting ones too: outputTracks() omits a track after publish_coast_time
+    // (0.25 s), which made every short dropout "lost: track deleted" before guide.lost_timeout could apply.
+    const pt::GuideStatus gs = guide_->update(tracker_->tracks(), sensor, scan.stamp);
     if (!gs.event.empty()) CAIRN_INFO(logger(), "guide " << gs.guide_id << ": " << gs.event);
 
     auto dmsg = std::make_unique<pmsg::PersonDetections>();

@@ -23,7 +23,10 @@ std::size_t maskScan(LaserScan& scan, const std::vector<MaskCircle>& circles, Ma
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (const auto& c : circles) {
     const double d = c.center.norm();
-    const double half = d > c.radius ? std::asin(c.radius / d) : M_PI / 2;  // tangent half-angle
+    // Tangent half-angle. A sensor inside the circle: "inside" looks at every beam (only returns inside the circle
+    // are masked, which is exact); "tangents" masks the half plane towards the centre (masking all would blank the
+    // scan).
+    const double half = d > c.radius ? std::asin(c.radius / d) : (mode == MaskMode::kReturnsInside ? M_PI : M_PI / 2);
     const double bearing = std::atan2(c.center.y(), c.center.x());
     for (std::size_t i = 0; i < scan.ranges.size(); ++i) {
       const double diff = std::remainder(scan.angle(i) - bearing, 2.0 * M_PI);

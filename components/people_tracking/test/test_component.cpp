@@ -116,6 +116,7 @@ struct World {
     tf.transforms.push_back(m);
     return tf;
   }
+  double hide_a_from = -1, hide_a_to = -1;  // scan time [s] during which A's legs are not seen (a box instead)
   Eigen::Vector2d personA(double t) const { return Eigen::Vector2d(2.5, 1.2) + va * t; }
   Eigen::Vector2d personB(double t) const { return Eigen::Vector2d(4.5, -1.3) + vb * t; }
 
@@ -132,7 +133,11 @@ struct World {
     scene.addSegment({-2.0, 4.5}, {10.0, 4.5}, pt::ObjectClass::kWall);
     scene.addBox({7.0, 2.5}, 0.4, 0.3, 0.2, pt::ObjectClass::kClutter);
     for (const Eigen::Vector2d& c : static_legs) scene.addCircle(c, 0.06, pt::ObjectClass::kTableLeg);
-    pt::addWalker(scene, a, 0);
+    if (t >= hide_a_from && t < hide_a_to) {
+      scene.addBox(a.position, 0.12, 0.12, 0.0, pt::ObjectClass::kClutter);  // returns where A is, but no legs
+    } else {
+      pt::addWalker(scene, a, 0);
+    }
     pt::addWalker(scene, b, 1);
     return pt::renderScan(scene, laserPose(t), laser, t, rng).scan;
   }
@@ -709,6 +714,47 @@ TEST(PeopleTrackerComponent, DetectorParametersChangeAtRunTime) {
   EXPECT_EQ(unmasked_beams, 0) << "mask.people none: scan_filtered is the scan";
   EXPECT_GE(processed_after, 10) << "scans still processed after the range change";
   EXPECT_EQ(after, 0) << "no legs beyond 0.1 m after the change, so no track on person A";
+}
+
+// The guide stays TRACKING through a leg dropout shorter than guide.lost_timeout (1 s): Person Lost is for a
+// guide gone that long (Yuan §2.2.1). The guide tracker used to see only the published tracks, which drop a track
+// after 0.25 s of coasting, so every short dropout was "lost: track deleted" and lost_timeout had no effect.
+TEST(PeopleTrackerComponent, GuideSurvivesAShortDropout) {
+  World world;
+  FallbackMountRig rig;
+  ASSERT_NO_FATAL_FAILURE(rig.start("people_container9", world, 0.2));
+  std::map<int64_t, pmsg::GuideState> guide;
+  auto guide_sub = rig.sim->create_subscription<pmsg::GuideState>("people/guide", cairn::QoS{}, [&](const pmsg::GuideState& m) {
+    std::lock_guard l(rig.heard.mu);
+    guide[key(m.header.stamp)] = m;
+  });
+  auto follow = rig.sim->create_client<psrv::Follow_Request, psrv::Follow_Response>("people/follow");
+  ASSERT_TRUE(waitFor([&] { return guide_sub->publisher_count_inter_process() > 0; }, 20s));
+  const double dt = 1.0 / 15.0;
+  const int steps = 60, select_at = 20;
+  world.hide_a_from = 35 * dt;  // 7 scans (0.47 s): longer than publish_coast_time, shorter than lost_timeout
+  world.hide_a_to = 42 * dt;
+  std::optional<psrv::Follow_Response> chosen;
+  rig.play(world, 300.0, steps, dt, [&](int k, double) {
+    if (k != select_at) return;
+    psrv::Follow_Request rq;
+    rq.command = psrv::Follow_Request_Constants::CLOSEST_IN_FRONT;
+    chosen = follow->call(rq, 20s);
+  });
+  rig.stop();
+  ASSERT_TRUE(chosen && chosen->success) << (chosen ? chosen->message : "no reply");
+  std::lock_guard l(rig.heard.mu);
+  int tracking = 0, during = 0;
+  for (int k = select_at + 2; k < steps; ++k) {
+    const auto* msg = heardAt(guide, 300.0 + k * dt);
+    if (!msg) continue;
+    EXPECT_EQ(msg->state, pmsg::GuideState_Constants::TRACKING) << "scan " << k << ": " << msg->event;
+    EXPECT_EQ(msg->track_id, chosen->track_id) << "scan " << k;
+    tracking += msg->state == pmsg::GuideState_Constants::TRACKING;
+    during += k >= 35 && k < 42;
+  }
+  EXPECT_GE(tracking, 25);
+  EXPECT_GE(during, 5) << "the dropout's scans were heard";
 }
 
 namespace {

@@ -51,6 +51,14 @@ TEST(Masking, WrapsAroundBehindTheSensorAndHandlesInsideCase) {
   EXPECT_FALSE(std::isnan(s.ranges[360]));
   LaserScan t = fullScan();
   EXPECT_EQ(maskScan(t, {{{0.1, 0.0}, 0.3}}), 361u);  // sensor inside: the front half plane, |angle| <= pi/2
+  // "inside" mode with the sensor inside: every return inside the circle, behind the sensor too (the return at
+  // 0.15 m straight back, 0.25 m from the centre, was kept), and nothing else.
+  LaserScan u = fullScan();
+  u.ranges[0] = 0.15f;    // angle -pi: (-0.15, 0), inside
+  u.ranges[360] = 0.3f;   // angle 0: (0.3, 0), inside
+  u.ranges[180] = 0.25f;  // angle -pi/2: (0, -0.25), 0.27 m from the centre: inside
+  EXPECT_EQ(maskScan(u, {{{0.1, 0.0}, 0.3}}, MaskMode::kReturnsInside), 3u);
+  EXPECT_TRUE(std::isnan(u.ranges[0]) && std::isnan(u.ranges[360]) && std::isnan(u.ranges[180]));
   LaserScan bad;
   EXPECT_THROW(maskScan(bad, {}), InputError);
 }

@@ -211,7 +211,7 @@ MaskBenchResult runMaskBench(const MaskBenchParams& p) {
       const Pose2 base{o.x, o.y, o.theta};
       const Pose2 sensor = base * Pose2{mount.x, mount.y, mount.theta};
       tracker.updateLegs(scan.stamp, detector.detectLegs(ls), sensor, detector.params(), &ls);
-      const std::vector<Track> tracks = tracker.outputTracks();
+      const std::vector<Track>& tracks = tracker.tracks();  // coasting ones too, as the component (guide.lost_timeout)
       if (guider.state() == GuideState::kSearch) guider.selectClosestInFront(tracks, sensor, scan.stamp);
       const GuideStatus st = guider.update(tracks, sensor, scan.stamp);
       sim::LaserScan filtered = scan;

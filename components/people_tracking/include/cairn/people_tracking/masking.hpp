@@ -37,7 +37,8 @@ enum class MaskMode {
 
 // Beams whose bearing lies within asin(r / d) of the circle's bearing are set to NaN (ROS: invalid reading);
 // with kReturnsInside only those of them whose return point lies inside the circle.
-// A sensor inside a circle masks the half plane towards its centre. Returns the number of beams masked.
+// A sensor inside a circle: kTangents masks the half plane towards its centre, kReturnsInside every return inside
+// the circle (behind the sensor too). Returns the number of beams masked.
 std::size_t maskScan(LaserScan& scan, const std::vector<MaskCircle>& circles, MaskMode mode = MaskMode::kTangents);
 
 // "tangents" | "inside"; throws InputError naming `key` otherwise.
