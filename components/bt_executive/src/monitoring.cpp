@@ -111,10 +111,15 @@ NavigationMonitor::NavigationMonitor(std::string target, int warn_failures, int 
 void NavigationMonitor::onResult(bool success) {
   std::lock_guard lock(mutex_);
   failures_ = success ? 0 : failures_ + 1;
+  if (success) retries_ = 0;
+  retrying_ = false;
 }
 
 Report NavigationMonitor::evaluate(TimePoint) {
   std::lock_guard lock(mutex_);
+  if (retrying_)
+    return report(Level::Ok, failures_, "retrying navigation after recovery " + std::to_string(retries_) + " (" +
+                                            std::to_string(failures_) + " consecutive failures)");
   const Level l = failures_ >= error_ ? Level::Error : failures_ >= warn_ ? Level::Warning : Level::Ok;
   return report(l, failures_, std::to_string(failures_) + " consecutive navigation failures");
 }
@@ -122,6 +127,19 @@ Report NavigationMonitor::evaluate(TimePoint) {
 void NavigationMonitor::reset(TimePoint) {
   std::lock_guard lock(mutex_);
   failures_ = 0;
+  retries_ = 0;
+  retrying_ = false;
+}
+
+int NavigationMonitor::attempts() const {
+  std::lock_guard lock(mutex_);
+  return retries_;
+}
+
+void NavigationMonitor::retry(TimePoint) {
+  std::lock_guard lock(mutex_);
+  ++retries_;
+  retrying_ = true;
 }
 
 // ------------------------------------------------------------------------------------------ ProcessSampler
@@ -324,6 +342,18 @@ void MonitorSet::resetTarget(const std::string& component, TimePoint now) {
     if (e.monitor->target() == component) e.monitor->reset(now);
 }
 
+int MonitorSet::attempts(const std::string& category) const {
+  int n = 0;
+  for (const auto& e : monitors_)
+    if (active(*e.monitor) && e.monitor->category() == category) n = std::max(n, e.monitor->attempts());
+  return n;
+}
+
+void MonitorSet::retry(const std::string& category, TimePoint now) {
+  for (auto& e : monitors_)
+    if (active(*e.monitor) && e.monitor->category() == category) e.monitor->retry(now);
+}
+
 // ------------------------------------------------------------------------------------------ nodes
 namespace {
 
@@ -381,6 +411,34 @@ class UpdateMonitorsNode : public SyncActionNode {
   Input<std::string> configuration_;
   std::string last_requested_;
   std::set<std::string> alerted_;
+};
+
+/// `attempt` := the retries granted to the active monitors of `category` since they last went well (MonitorSet::attempts),
+/// or with `retry` true grants one more (MonitorSet::retry): the ladder's step to escalate from, and its last step.
+class MonitorRetryNode : public SyncActionNode {
+ public:
+  MonitorRetryNode(const NodeConfig& c, MonitorSet& m, bool grant)
+      : SyncActionNode(c), monitors_(m), grant_(grant), category_(c.input<std::string>("category")) {
+    if (!grant) attempt_ = c.output<int>("attempt");
+  }
+
+ protected:
+  NodeStatus onTick() override {
+    std::string category;
+    if (!category_.get(category)) return NodeStatus::FAILURE;
+    if (grant_) {
+      monitors_.retry(category, scheduler().now());
+    } else {
+      attempt_.set(monitors_.attempts(category));
+    }
+    return NodeStatus::SUCCESS;
+  }
+
+ private:
+  MonitorSet& monitors_;
+  bool grant_;
+  Input<std::string> category_;
+  Output<int> attempt_;
 };
 
 enum class RecoveryKind { Restart, Backwards, Rotate, Supervisor };
@@ -458,6 +516,14 @@ void registerMonitoringNodes(NodeFactory& f, MonitorSet& monitors, RecoveryInter
   reg("SlowRotate", {InputPortWithDefault<double>("angle", "6.283", "radians")},
       [ms, rc](const NodeConfig& c) { return std::make_unique<RecoveryNode>(c, RecoveryKind::Rotate, *ms, *rc); },
       "localization recovery (Table 5.1)");
+  reg("RecoveryAttempt",
+      {InputPort<std::string>("category", "monitor category, e.g. navigation"),
+       OutputPort<int>("attempt", "retries granted since its monitors last went well (0: first recovery)")},
+      [ms](const NodeConfig& c) { return std::make_unique<MonitorRetryNode>(c, *ms, false); },
+      "which step of a recovery ladder is due (escalation, Table 5.1)");
+  reg("RetryTask", {InputPort<std::string>("category", "monitor category, e.g. navigation")},
+      [ms](const NodeConfig& c) { return std::make_unique<MonitorRetryNode>(c, *ms, true); },
+      "after a recovery step: let the blocked task try again (its monitors report OK until its next result)");
   reg("AskSupervisor", {InputPort<std::string>("message", "text of the alert")},
       [ms, rc](const NodeConfig& c) { return std::make_unique<RecoveryNode>(c, RecoveryKind::Supervisor, *ms, *rc); },
       "last resort: alert the supervisors and wait for their all-clear (Stüde §5.3.1)");

@@ -75,8 +75,12 @@ ActionStats searchAction(const GridModel& m, const Eigen::Vector2d& a, const Eig
 }
 
 ActionStats moveAction(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Params& p) {
+  return moveAction((b - a).norm(), p);
+}
+
+ActionStats moveAction(double length, const Params& p) {
   ActionStats s;
-  s.length = (b - a).norm();
+  s.length = length;
   s.p_s = std::exp(-s.length / p.l_fail);  // exponential distance to a navigation failure
   s.mu = s.length > 0 ? p.v / s.length : 1e3;
   s.nu = p.v / p.l_fail;
@@ -102,21 +106,24 @@ std::vector<Eigen::Vector2d> samplePlaces(const GridModel& m, const Eigen::Vecto
   for (int k = 0; k < p.sample_attempts && static_cast<int>(out.size()) < p.n_pl; ++k) {
     auto [i, j] = cells[pick(rng)];
     const Eigen::Vector2d c = m.cellCenter(i, j);
-    bool merged = false;
-    for (std::size_t q = 0; q < out.size(); ++q) {
-      if ((out[q] - c).norm() < p.r_D) {  // deduplicate: keep the cell with the larger rate
-        if (m.rate(i, j) > out_rate[q]) {
-          out[q] = c;
-          out_rate[q] = m.rate(i, j);
-        }
-        merged = true;
-        break;
+    // Deduplicate (§5.4.3: of close cells only the one with the larger rate is kept): a cell within r_D of kept
+    // places replaces all of them if its rate is larger than each of theirs, else it is dropped. (Replacing only
+    // the first close place could leave the new one within r_D of another.)
+    const double rate = m.rate(i, j);
+    bool larger = true, close = false;
+    for (std::size_t q = 0; q < out.size(); ++q)
+      if ((out[q] - c).norm() < p.r_D) {
+        close = true;
+        larger = larger && rate > out_rate[q];
       }
-    }
-    if (!merged) {
-      out.push_back(c);
-      out_rate.push_back(m.rate(i, j));
-    }
+    if (close && !larger) continue;
+    for (std::size_t q = out.size(); q-- > 0;)
+      if ((out[q] - c).norm() < p.r_D) {
+        out.erase(out.begin() + static_cast<std::ptrdiff_t>(q));
+        out_rate.erase(out_rate.begin() + static_cast<std::ptrdiff_t>(q));
+      }
+    out.push_back(c);
+    out_rate.push_back(rate);
   }
   return out;
 }
@@ -237,9 +244,22 @@ std::string label(const char* kind, int from, int to) {
 sbt::Node buildTree(const GridModel& m, const Eigen::Vector2d& start, const std::vector<Eigen::Vector2d>& places,
                     bool wait_at_start, const std::vector<int>& choice, const Params& p) {
   std::vector<sbt::Node> acts;
+  // The return to x0 (Fig. 5.9) starts where the person was found (§5.4.4: 1/μ_T is the time "to find a person and
+  // then return"). Its length is the expected distance from x0 of the place where the search succeeds: each action
+  // weighted by the probability that it is the one that succeeds (its p_s after all earlier ones failed); a
+  // person found on the path to a place is counted at that place (an approximation). It used to be measured from
+  // the tour's last place, which is optimistic for a tour ending near x0.
+  double p_none = 1.0, w_sum = 0.0, d_sum = 0.0;
+  auto succeedsAt = [&](double p_s, const Eigen::Vector2d& x) {
+    const double w = p_none * p_s;
+    w_sum += w;
+    d_sum += w * (x - start).norm();
+    p_none *= 1.0 - p_s;
+  };
   if (wait_at_start) {
     const auto w = waitAction(m, start, p);
     acts.push_back(sbt::action("Wait:x0", w.p_s, w.mu, w.nu));
+    succeedsAt(w.p_s, start);
   }
   Eigen::Vector2d prev = start;
   int prev_id = 0;
@@ -247,19 +267,19 @@ sbt::Node buildTree(const GridModel& m, const Eigen::Vector2d& start, const std:
     if (choice[k] == 0) continue;
     const auto s = searchAction(m, prev, places[k], p);
     acts.push_back(sbt::action(label("Search:", prev_id, static_cast<int>(k) + 1), s.p_s, s.mu, s.nu));
+    succeedsAt(s.p_s, places[k]);
     prev = places[k];
     prev_id = static_cast<int>(k) + 1;
     if (choice[k] == 2) {
       const auto w = waitAction(m, places[k], p);
       acts.push_back(sbt::action(label("Wait:", -1, prev_id), w.p_s, w.mu, w.nu));
+      succeedsAt(w.p_s, places[k]);
     }
   }
   if (acts.empty()) throw std::invalid_argument("empty person-search plan");
   sbt::Node search = acts.size() == 1 ? acts.front() : sbt::fallback(std::move(acts), "search");
   if (prev_id == 0) return search;
-  // Return to the help location (Fig. 5.9); the return is measured from the last place of the tour, which is
-  // conservative for persons found earlier.
-  const auto mv = moveAction(prev, start, p);
+  const auto mv = w_sum > 0 ? moveAction(d_sum / w_sum, p) : moveAction(prev, start, p);
   return sbt::sequence({std::move(search), sbt::action("MoveTo:x0", mv.p_s, mv.mu, mv.nu)}, "psbt");
 }
 

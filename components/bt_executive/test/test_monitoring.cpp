@@ -189,8 +189,6 @@ struct SimSystem : RecoveryInterface {
   std::map<std::string, bool> alive{{"camera", true}, {"slam", true}};
   std::vector<std::string> calls;
   std::vector<Done> pending;
-  bool supervisor_fixes_nav = true;
-  NavigationMonitor* nav = nullptr;
   void restartComponent(const std::string& c, Done d) override {
     calls.push_back("restart:" + c);
     alive[c] = true;
@@ -206,7 +204,6 @@ struct SimSystem : RecoveryInterface {
   }
   void askSupervisor(const std::string& m, Done d) override {
     calls.push_back("supervisor:" + m);
-    if (nav && supervisor_fixes_nav) nav->reset({});
     pending.push_back(std::move(d));
   }
   void sendAlert(const std::string& m) override { calls.push_back("alert:" + m); }
@@ -223,7 +220,6 @@ class MonitoredRun : public ::testing::Test {
     rate = &monitors.emplace<TopicRateMonitor>({"operating"}, "/camera/image", "camera", 10.0);
     nav = &monitors.emplace<NavigationMonitor>({"operating"}, "navigation", 1, 1);
     cpu = &monitors.emplace<ValueMonitor>({"operating"}, "cpu:slam", "resource", "slam", Band{.error_high = 90});
-    sys.nav = nav;
     registerMonitoringNodes(factory, monitors, sys);
     const std::string xml = "<root BTCPP_format=\"4\" main_tree_to_execute=\"MonitoredExecution\">"
                             "<include path=\"" + monitoringTreesPath() + "\"/>"
@@ -288,15 +284,37 @@ TEST_F(MonitoredRun, KilledComponentIsRestartedAndTaskResumes) {
   EXPECT_EQ(tree.rootBlackboard()->get<std::int64_t>("recoveries"), 1);
 }
 
-TEST_F(MonitoredRun, NavigationLadderEscalatesToSupervisor) {
+// Table 5.1's navigation ladder. Only a goal reached clears "k failures in a row", so every step ends with a retry
+// (the task runs again); a failed retry escalates: wait, move backwards, ask the supervisor. Before, the steps
+// re-checked an error nothing could clear while the task was blocked, and the supervisor's all-clear was followed
+// by the same error again (the fake supervisor here reset the monitor, which the real one does not).
+TEST_F(MonitoredRun, NavigationLadderRetriesAndEscalates) {
   for (int k = 0; k < 25; ++k) step();
-  nav->onResult(false);  // persistent navigation error: waiting and moving back do not clear it
-  for (int k = 0; k < 200 && sys.calls.size() < 2; ++k) step();
-  ASSERT_EQ(sys.calls.size(), 2u);
-  EXPECT_EQ(sys.calls[0], "backwards");  // after wait-and-retry (5 s Sleep) failed
-  EXPECT_EQ(sys.calls[1], "supervisor:1 consecutive navigation failures");
+  // One navigation failure (error at 1), then the ladder until the task runs again.
+  auto fail_and_recover = [&](const char* what) {
+    nav->onResult(false);
+    for (int k = 0; k < 3; ++k) step();
+    EXPECT_TRUE(blocked()) << what;
+    const std::int64_t at_block = work();
+    for (int k = 0; k < 200 && blocked(); ++k) step();
+    EXPECT_FALSE(blocked()) << what << ": the task was not released for its retry";
+    for (int k = 0; k < 5; ++k) step();
+    EXPECT_GT(work(), at_block) << what << ": the task did not run again";
+  };
+  fail_and_recover("first failure");
+  EXPECT_TRUE(sys.calls.empty()) << "step 1 only waits";
+  fail_and_recover("the retry failed");
+  EXPECT_EQ(sys.calls, std::vector<std::string>{"backwards"});
+  fail_and_recover("the second retry failed");
+  EXPECT_EQ(sys.calls, (std::vector<std::string>{"backwards", "supervisor:3 consecutive navigation failures"}));
+  // The next goal is reached: no error, and a later failure starts the ladder from the beginning.
+  nav->onResult(true);
   for (int k = 0; k < 5; ++k) step();
-  EXPECT_FALSE(blocked());  // the supervisor's all-clear released the task
+  EXPECT_FALSE(blocked());
+  EXPECT_EQ(nav->attempts(), 0);
+  fail_and_recover("a new failure after a success");
+  EXPECT_EQ(sys.calls.size(), 2u) << "waits again, no second move backwards";
+  EXPECT_EQ(tree.rootBlackboard()->get<std::int64_t>("recoveries"), 4);
 }
 
 TEST_F(MonitoredRun, ResourceErrorsOnlyAlertOnce) {

@@ -56,6 +56,12 @@ class Monitor {
   virtual Report evaluate(TimePoint now) = 0;
   /// Forget history (after a restart).
   virtual void reset(TimePoint) {}
+  /// For errors only the task can clear (navigation: only a goal reached clears "k failures in a row"), a recovery
+  /// step is followed by a retry: `retry()` lets the blocked task run again, `attempts()` counts the retries granted
+  /// since the monitored thing last went well, so a ladder can escalate (Table 5.1: wait and retry, move
+  /// backwards, ask the supervisor). Default: a retry is a reset, and there is no escalation.
+  virtual int attempts() const { return 0; }
+  virtual void retry(TimePoint now) { reset(now); }
 
  protected:
   Report report(Level l, double v, std::string msg) const { return {name_, category_, target_, l, v, std::move(msg)}; }
@@ -116,14 +122,21 @@ class ValueMonitor : public Monitor {
 class NavigationMonitor : public Monitor {
  public:
   NavigationMonitor(std::string target, int warn_failures = 1, int error_failures = 2);
+  /// A NavigateTo result: a success clears the failures and the retries; a failure counts (and ends a retry).
   void onResult(bool success);
   Report evaluate(TimePoint now) override;
   void reset(TimePoint) override;
+  /// Retries granted since the last success.
+  int attempts() const override;
+  /// OK until the next result, so the blocked task runs and sends its goal again.
+  void retry(TimePoint now) override;
 
  private:
   int warn_, error_;
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   int failures_ = 0;
+  int retries_ = 0;
+  bool retrying_ = false;
 };
 
 /// CPU and memory of a process from /proc (Linux): CPU % of one core between two samples (utime + stime of
@@ -228,6 +241,9 @@ class MonitorSet {
   static Report worstBlocking(const std::vector<Report>& reports);
   /// Resets every monitor whose target is `component` (after a restart).
   void resetTarget(const std::string& component, TimePoint now);
+  /// The most retries granted to an active monitor of `category` (Monitor::attempts), and a retry for each of them.
+  int attempts(const std::string& category) const;
+  void retry(const std::string& category, TimePoint now);
 
  private:
   struct Entry {

@@ -53,6 +53,8 @@ ActionStats waitAction(const GridModel& m, const Eigen::Vector2d& x, const Param
 ActionStats searchAction(const GridModel& m, const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Params& p);
 /// Move back to the help location: fails only through navigation (rate v/l_fail), succeeds after l/v.
 ActionStats moveAction(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Params& p);
+/// The same for a path of `length` metres.
+ActionStats moveAction(double length, const Params& p);
 
 /// Places sampled with probability ∝ ∫_cell λ within max_distance, deduplicated within r_D (keeping the larger
 /// rate), at most n_pl (§5.4.3).
