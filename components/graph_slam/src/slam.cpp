@@ -531,7 +531,9 @@ bool GraphSlam::Impl::verifyGlobal(const std::vector<LoopMatch>& fresh, std::vec
     }
     if (static_cast<int>(agreeing.size()) >= 1 + options.n_ver) return true;
   }
-  for (const LoopMatch& m : fresh) pending_global.push_back(m);
+  // One detection per query: the query's other matches (overlapping submaps of the same place) agree with it by
+  // construction and are no independent verification (Stüde: n_ver detected pairs; as confirmLocal).
+  if (!fresh.empty()) pending_global.push_back(fresh.front());
   return false;
 }
 
@@ -584,8 +586,11 @@ int GraphSlam::Impl::searchLoops(std::int64_t id) {
                      nodes[static_cast<std::size_t>(id)].global_pose.theta, agreeing.size());
       ++links;
       added = 1;
-      const double alpha = static_cast<double>(nodes.size() - trajectory_first_node) / static_cast<double>(nodes.size());
-      if (links >= options.n_start || alpha >= options.alpha_min) linked = true;
+      // Stüde §3.2.1: global search (each link verified by n_ver detections) for the first n_start links and until
+      // n_local / n_WM >= α_min. n_local counts the nodes of the graph connected to the current one: after a link
+      // into the (single) existing map that is all of them, so the n_start rule decides. (Before, α was the new
+      // trajectory's share of all nodes and OR-ed, so a long unlinked trajectory ended the search after one link.)
+      if (links >= options.n_start) linked = true;
       pending_global.clear();
       cov_since_loop.setZero();
     }

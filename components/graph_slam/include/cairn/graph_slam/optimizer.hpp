@@ -134,8 +134,8 @@ class Optimizer {
   OptimizerSummary optimize(PoseGraph& graph);
 
   /// Marginal covariances (in the tangent space of geometry.hpp's retract) of the given variables at the
-  /// current values, from the sparse Cholesky factor of the Hessian (Stüde eq. 3.8 uses these for the
-  /// loop-closure search radius). Fixed / gauge variables get zero matrices. Throws std::runtime_error if the
+  /// current values, from the sparse Cholesky factor of the Hessian (for uncertainty metrics such as Yuan's
+  /// √det Σ; the SLAM's loop-search radius, Stüde eq. 3.8, uses the compounded odometry covariance instead). Fixed / gauge variables get zero matrices. Throws std::runtime_error if the
   /// Hessian is singular.
   std::vector<Eigen::MatrixXd> marginalCovariances(const PoseGraph& graph, std::span<const VariableId> ids);
 
