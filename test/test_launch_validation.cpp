@@ -50,6 +50,14 @@ containers:
   EXPECT_EQ(std::get<double>(c.params.at("rate_hz")), 5.5);
   EXPECT_EQ(c.qos.at("chatter").depth, 3);
   EXPECT_EQ(c.line, 6);
+  // Namespaces are spelled as the node spells them ("robot/" is /robot); an invalid one names its line.
+  auto ns = cairn::parse_launch_spec_text("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
+                                          "        namespace: robot/\n",
+                                          "x.yaml");
+  EXPECT_EQ(ns.containers.at(0).components.at(0).fqn(), "/robot/talker");
+  EXPECT_EQ(error_of("containers:\n  - name: c\n    components:\n      - class: cairn_demo::Talker\n"
+                     "        namespace: 9x\n"),
+            "spec.yaml:5: component.namespace: invalid namespace '9x'");
 }
 
 TEST(LaunchSpec, YamlSyntaxErrorNamesTheLine) {

@@ -78,11 +78,6 @@ Stats stats(std::vector<double> v) {
 }
 
 // SIGTERM to a child of this bench and wait for it.
-void stop(pid_t child) {
-  kill(child, SIGTERM);
-  waitpid(child, nullptr, 0);
-}
-
 double ns_since(Clock::time_point t0) { return std::chrono::duration<double, std::nano>(Clock::now() - t0).count(); }
 
 std::string size_name(std::size_t n) {
@@ -517,7 +512,7 @@ void respawn(const std::string& self, int kills) {
     const pid_t launch = cairn::spawn_process({"/bin/sh", "-c", "exec " + cairn_exe + " launch " + spec + " > /dev/null 2>&1"});
     if (!exec.spin_until([&] { return received > 0; }, 20s)) {
       std::printf("{\"case\":\"respawn\",\"error\":\"no message from the launched container within 20 s\"}\n");
-      stop(launch);
+      cairn::stop_processes({launch});
       break;
     }
     cold.push_back(ns_since(t0));
@@ -526,13 +521,13 @@ void respawn(const std::string& self, int kills) {
     for (int tries = 0; tries < 50 && c.empty(); ++tries) c = children_with(launch, "bench_respawn");
     if (c.size() != 1) {
       std::printf("{\"case\":\"respawn\",\"error\":\"found %zu container processes\"}\n", c.size());
-      stop(launch);
+      cairn::stop_processes({launch});
       break;
     }
     const auto t1 = Clock::now();
     kill(c[0], SIGKILL);
     if (exec.spin_until([&] { return restarted; }, 20s)) again.push_back(ns_since(t1));
-    stop(launch);
+    cairn::stop_processes({launch});
     exec.spin_for(200ms);
   }
   std::filesystem::remove(spec);
@@ -593,7 +588,7 @@ void mixed(const std::string& self, int iters) {
   const pid_t sink = cairn::spawn_process({self, "sink", "60"});
   const bool matched = exec.spin_until([&] { return pub->inter_process_subscription_count() > 0; }, 20s);
   const Stats inline_with = measure(true), queued_with = measure(false);
-  stop(sink);
+  cairn::stop_processes({sink});
   other.cancel();
   other_thread.join();
   for (const auto& [name, with, alone] : {std::tuple{"inline", inline_with, inline_alone}, std::tuple{"queued", queued_with, queued_alone}}) {
@@ -668,7 +663,7 @@ DdsperfResult ddsperf_ping(int domain, std::size_t size, double seconds, const s
   std::this_thread::sleep_for(300ms);
   const std::string out = run_capture("ddsperf -i " + d + " -D " + std::to_string(int(seconds) + 1) + " ping size " +
                                       std::to_string(size) + " " + mode + " 2>&1");
-  stop(pong);
+  cairn::stop_processes({pong});
   std::vector<double> p50, p99, mx;
   std::istringstream in(out);
   std::string line;
@@ -817,7 +812,7 @@ void dds_rtt(const std::string& self, std::size_t size, double seconds, bool imm
     run(1.0, false);
     run(seconds, true);
   }
-  stop(pong);
+  cairn::stop_processes({pong});
   const auto s = stats(half_rtt);
   const std::string mode = immediate ? "listener" : "waitset";
   const auto base = ddsperf_ping(node.context().domain_id(), size, seconds, mode);

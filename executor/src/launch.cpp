@@ -145,8 +145,11 @@ class SpecParser {
     c.name = n["name"] ? str(n["name"], "component.name") : default_node_name(c.class_name);
     if (!valid_name(c.name)) fail(n["name"] ? n["name"] : n, "component.name: '" + c.name + "' is not a valid node name");
     if (n["namespace"]) {
-      c.ns = str(n["namespace"], "component.namespace");
-      if (c.ns.empty() || c.ns[0] != '/') c.ns = "/" + c.ns;
+      try {  // the node's own rule ("robot", "/robot/" -> "/robot"), so fqn and remap keys match the node
+        c.ns = normalize_namespace(str(n["namespace"], "component.namespace"));
+      } catch (const NodeError& e) {
+        fail(n["namespace"], std::string("component.namespace: ") + e.what());
+      }
     }
     if (!fqns.insert(c.fqn()).second) fail(n, "component: duplicate node name '" + c.fqn() + "'");
     if (const auto p = n["params"]) {
@@ -579,8 +582,6 @@ int run_launch_main(int argc, char** argv) {
     return true;
   };
 
-  auto stop_all = [](const std::vector<pid_t>& pids) { stop_processes(pids); };
-
   std::vector<RunningProcess> procs;
   auto all_pids = [&] {
     std::vector<pid_t> p;
@@ -602,7 +603,7 @@ int run_launch_main(int argc, char** argv) {
       std::cerr << "cairn: " << spec.file << ": container " << rc.name << ": " << e.what() << "\n";
     }
     if (!ok) {
-      stop_all(all_pids());
+      stop_processes(all_pids());
       return 1;
     }
   }
@@ -615,7 +616,7 @@ int run_launch_main(int argc, char** argv) {
       start_process(procs.back());
     } catch (const std::exception& e) {
       std::cerr << "cairn: " << spec.file << ":" << p.line << ": process " << p.name << ": " << e.what() << "\n";
-      stop_all(all_pids());
+      stop_processes(all_pids());
       return 1;
     }
   }
@@ -642,7 +643,7 @@ int run_launch_main(int argc, char** argv) {
       }
       if (!ok && rc.pid > 0) {
         // Running but without its components: stop it and try again after the next backoff.
-        stop_all({rc.pid});
+        stop_processes({rc.pid});
         const double d = rc.died(std::chrono::steady_clock::now());
         CAIRN_ERROR(log, "container " << rc.name << " could not be restarted; trying again in " << d << " s");
       } else if (!ok) {
@@ -697,7 +698,7 @@ int run_launch_main(int argc, char** argv) {
     }
   }
   CAIRN_INFO(log, "stopping");
-  stop_all(all_pids());
+  stop_processes(all_pids());
   if (failures.empty()) return 0;
   std::string what;
   for (const auto& f : failures) what += (what.empty() ? "" : "; ") + f;
