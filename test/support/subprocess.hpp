@@ -33,8 +33,12 @@ inline RunResult run(const std::string& cmd) {
 }
 
 /// Starts `cmd` in the background with stdout+stderr into `log`; returns the pid of the shell's exec.
+/// The log is emptied here, before the child exists: the shell's own `>` truncates only once it runs, so a caller
+/// polling the log at once could read a stale file left by an earlier test process with the same pid (CI saw a
+/// "wait for 5 lines" pass in 1 ms on an old log and SIGTERM the launch before it had installed its handler).
 inline pid_t start(const std::string& cmd, const std::string& log) {
-  return spawn_process({"/bin/sh", "-c", "exec " + cmd + " > " + log + " 2>&1"});
+  std::ofstream(log, std::ios::trunc).flush();
+  return spawn_process({"/bin/sh", "-c", "exec " + cmd + " >> " + log + " 2>&1"});
 }
 
 inline std::string slurp(const std::string& path) {
