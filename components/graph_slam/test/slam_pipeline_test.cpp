@@ -159,6 +159,84 @@ const SimRun& outAndBack() {
   return run;
 }
 
+// The apartment (irregular rooms, unlike the office's corridor with a door every 6 m, where a whole-map search
+// from a few metres of map finds the same place shifted by 6 m): a round in the bedroom, out along the hallway
+// to x = 5.5, back and into the bedroom again. Deterministic (seeded); 75 s, 750 scans.
+const SimRun& apartmentRound() {
+  namespace sim = cairn::sim;
+  static const SimRun run = [] {
+    sim::SimConfig cfg;
+    cfg.seed = 5;
+    cfg.people = false;
+    cfg.crowd = false;
+    cfg.odometry.scale_error = 0.02;
+    cfg.odometry.heading_drift = 0.01;  // rad/m
+    cfg.laser.resolution = 1.0 * M_PI / 180.0;
+    cfg.start = sim::Pose2{2.6, 6.5, 0.0};
+    sim::Simulator s(sim::loadWorld(sim::resolveWorldPath("apartment")), cfg);
+    s.followRoute({{4.2, 6.5}, {4.2, 7.6}, {2.6, 7.6}, {2.5, 6.0}, {2.5, 4.5}, {5.5, 4.5}, {2.5, 4.5}, {2.5, 6.3},
+                   {4.2, 6.5}, {4.2, 7.6}, {2.6, 7.6}});
+    sim::SimOutput out;
+    s.advance(75.0, out);
+    return SimRun{out.scans, out.odometry, out.ground_truth};
+  }();
+  return run;
+}
+
+// One link of the node-based global search (Stüde §3.2.1) as seen from outside: the addScan call of an unlinked
+// trajectory that added loop edges.
+struct GlobalLink {
+  std::size_t trajectory_nodes = 0, all_nodes = 0;  // at the link: the new trajectory's nodes, all nodes
+  bool localized_after = false;                      // the search turned local with this link
+  std::vector<std::int64_t> queries;                 // query node of each loop edge the link added
+};
+
+struct NewSessionRun {
+  std::vector<GlobalLink> links;
+  std::size_t multi_detection_queries = 0;  // nodes of the unlinked trajectory whose global search matched ≥ 2 submaps
+  bool localized = false;
+  double placement_error = 1e9;  // m, against the truth, at the scan that localized the session
+};
+
+// Maps the apartment round's first `map_seconds` with `o`, saves, loads, and feeds the new session from the first
+// scan after the turn in the hallway (heading west again) whose true x is below `start_x`, until it is localized.
+NewSessionRun extendApartmentMap(const gs::SlamOptions& o, double map_seconds, double start_x) {
+  const SimRun& run = apartmentRound();
+  std::size_t split = 0;
+  while (split < run.scans.size() && run.scans[split].stamp - run.scans.front().stamp < map_seconds) ++split;
+  const std::size_t hallway_end = firstScanWhere(run, split, [](const cairn::sim::Pose2& p) { return p.x > 5.2; });
+  const std::size_t begin = firstScanWhere(
+      run, hallway_end, [&](const cairn::sim::Pose2& p) { return std::abs(p.theta) > 3.0 && p.x < start_x; });
+  EXPECT_LT(begin, run.scans.size());
+  gs::GraphSlam first(o);
+  feed(first, run, 0, split);
+  first.finish();
+  const fs::path d = tempDir("apartment");
+  first.save((d / "map.cslam").string());
+  gs::GraphSlam slam = gs::GraphSlam::load((d / "map.cslam").string(), o);
+  EXPECT_FALSE(slam.localized());
+  const std::size_t old_nodes = slam.nodes().size();
+  NewSessionRun r;
+  for (std::size_t i = begin; i < run.scans.size() && !slam.localized(); ++i) {
+    const std::size_t edges_before = slam.edges().size();
+    const std::size_t detections_before = slam.stats().global_detections;
+    const auto u = slam.addScan(run.scans[i], toGs(nearest(run.odom, run.scans[i].stamp).pose));
+    if (!u) continue;
+    if (slam.stats().global_detections >= detections_before + 2) ++r.multi_detection_queries;
+    if (u->loops_added == 0) continue;
+    GlobalLink link;
+    link.trajectory_nodes = slam.nodes().size() - old_nodes;
+    link.all_nodes = slam.nodes().size();
+    link.localized_after = slam.localized();
+    for (std::size_t e = edges_before; e < slam.edges().size(); ++e)
+      if (slam.edges()[e].kind == gs::EdgeKind::kLoop) link.queries.push_back(slam.edges()[e].to);
+    r.links.push_back(link);
+    if (slam.localized()) r.placement_error = errorInMapFrame(slam, run, slam.currentPose(), run.scans[i].stamp);
+  }
+  r.localized = slam.localized();
+  return r;
+}
+
 }  // namespace
 
 TEST(GraphSlam, ClosesASimulatedLoopAndEndsCloserToTheTruthThanWithout) {
@@ -404,6 +482,59 @@ TEST(GraphSlam, ContinuesMappingInANewSessionLinkedByAGlobalSearch) {
   EXPECT_GT(recall.revisits, 0u);
   EXPECT_LE(recall.accepted, recall.matched);
   EXPECT_LE(recall.matched, recall.revisits);
+}
+
+// Stüde §3.2.1: the search stays global "for the first n_start detected loops" (each verified by n_ver
+// detections) and until α = n_local / n_WM ≥ α_min. Until 2026-11-23 the rule was "n_start links OR the new
+// trajectory's share of all nodes ≥ α_min", so a new session that had mapped more nodes than the loaded map
+// before its first link went local after that one link. Here the loaded map is the first 5 s in the bedroom
+// (22 nodes); the new session maps the hallway and turns before it reaches the bedroom, so it holds 63 % of all
+// nodes at its first link.
+TEST(GraphSlam, GlobalSearchStaysGlobalForNStartLinksOnALongUnlinkedTrajectory) {
+  const gs::SlamOptions o = simOptions();
+  ASSERT_EQ(o.n_start, 3);
+  const NewSessionRun r = extendApartmentMap(o, 5.0, 10.0);
+  ASSERT_FALSE(r.links.empty());
+  const GlobalLink& first = r.links.front();
+  std::printf("first global link: the new trajectory holds %zu of %zu nodes; %zu links until localized, placement "
+              "error %.3f m\n", first.trajectory_nodes, first.all_nodes, r.links.size(), r.placement_error);
+  // The condition of the defect: at its first link the unlinked trajectory already holds ≥ α_min of all nodes.
+  ASSERT_GE(static_cast<double>(first.trajectory_nodes), o.alpha_min * static_cast<double>(first.all_nodes));
+  EXPECT_FALSE(first.localized_after) << "one link ended the global search";
+  EXPECT_TRUE(r.localized);
+  EXPECT_EQ(r.links.size(), static_cast<std::size_t>(o.n_start));
+  for (std::size_t k = 0; k < r.links.size(); ++k) {
+    EXPECT_EQ(r.links[k].localized_after, k + 1 == static_cast<std::size_t>(o.n_start)) << "link " << k;
+    EXPECT_GE(r.links[k].queries.size(), static_cast<std::size_t>(1 + o.n_ver)) << "link " << k;
+  }
+  EXPECT_LT(r.placement_error, 0.5);  // in the bedroom, not in another room
+}
+
+// Stüde §3.2.1: a global detection needs n_ver further detected pairs around its target for verification. A node
+// whose scan matches several overlapping submaps of the same place (without the verifier every finished submap
+// is searched) is one detection: its matches agree by construction. Until 2026-11-23 each match was pending on
+// its own, so one query's two or three matches verified each other and links were made from two queries. The
+// loaded map here is the whole bedroom round in submaps of 20 scans; most queries in the bedroom match 2–3 of them.
+TEST(GraphSlam, EachGlobalQueryContributesOneDetection) {
+  gs::SlamOptions o = simOptions();
+  o.local.scans_per_submap = 20;
+  ASSERT_EQ(o.n_ver, 2);
+  const NewSessionRun r = extendApartmentMap(o, 16.0, 3.5);
+  std::printf("%zu queries with several detections; %zu links, placement error %.3f m\n", r.multi_detection_queries,
+              r.links.size(), r.placement_error);
+  ASSERT_GE(r.multi_detection_queries, 2u);  // the case of the defect occurs
+  ASSERT_FALSE(r.links.empty());
+  for (std::size_t k = 0; k < r.links.size(); ++k) {
+    const std::vector<std::int64_t>& q = r.links[k].queries;
+    std::vector<std::int64_t> distinct = q;
+    std::sort(distinct.begin(), distinct.end());
+    distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+    // Each loop edge of a link comes from its own query node, and n_ver + 1 of them verify the link.
+    EXPECT_EQ(distinct.size(), q.size()) << "link " << k << ": a query counted more than once";
+    EXPECT_GE(distinct.size(), static_cast<std::size_t>(1 + o.n_ver)) << "link " << k;
+  }
+  EXPECT_TRUE(r.localized);
+  EXPECT_LT(r.placement_error, 0.5);
 }
 
 TEST(GraphSlam, LocalizesOnALoadedMapWithoutGrowingIt) {
