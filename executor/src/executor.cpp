@@ -138,6 +138,11 @@ void Executor::add_timer(const std::shared_ptr<TimerBase>& t) {
   notify();
 }
 
+std::size_t Executor::timer_count() const {
+  std::lock_guard l(mu_);
+  return timers_.size();
+}
+
 void Executor::remove_timer(const TimerBase* t) {
   std::lock_guard l(mu_);
   timers_.erase(std::remove_if(timers_.begin(), timers_.end(), [t](const auto& p) { return p.get() == t; }),

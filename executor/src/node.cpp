@@ -155,39 +155,41 @@ void Node::record(EndpointRecord::Kind kind, const std::string& topic, const cha
   ctx_->record(EndpointRecord{kind, fqn_, topic, type, qos});
 }
 
-std::shared_ptr<TimerBase> Node::create_wall_timer(std::chrono::nanoseconds period, std::function<void()> cb,
-                                                   std::shared_ptr<CallbackGroup> group) {
-  auto t = std::make_shared<TimerBase>(group ? group : default_group_, std::make_shared<Clock>(ClockType::Steady),
-                                       period, std::move(cb));
-  if (!dry_run()) {
-    exec_->add_timer(t);
+std::shared_ptr<TimerBase> Node::adopt_timer(std::shared_ptr<TimerBase> t) {
+  if (dry_run()) return t;
+  std::vector<std::shared_ptr<TimerBase>> gone;
+  {
     std::lock_guard l(mu_);
+    // A cancelled timer (a one-shot timer that has fired is one) held by nobody but this node and its executor
+    // can never run again: only a holder could reset() it. Kept, a node creating one-shot timers would keep
+    // every one of them, and the executor would pass over all of them for every item it runs.
+    auto dead = std::stable_partition(timers_.begin(), timers_.end(),
+                                      [](const auto& x) { return !(x->canceled() && x.use_count() <= 2); });
+    gone.assign(std::make_move_iterator(dead), std::make_move_iterator(timers_.end()));
+    timers_.erase(dead, timers_.end());
     timers_.push_back(t);
   }
+  for (const auto& g : gone) exec_->remove_timer(g.get());
+  exec_->add_timer(t);
   return t;
+}
+
+std::shared_ptr<TimerBase> Node::create_wall_timer(std::chrono::nanoseconds period, std::function<void()> cb,
+                                                   std::shared_ptr<CallbackGroup> group) {
+  return adopt_timer(std::make_shared<TimerBase>(group ? group : default_group_,
+                                                 std::make_shared<Clock>(ClockType::Steady), period, std::move(cb)));
 }
 
 std::shared_ptr<TimerBase> Node::create_timer(std::chrono::nanoseconds period, std::function<void()> cb,
                                               std::shared_ptr<CallbackGroup> group) {
-  auto t = std::make_shared<TimerBase>(group ? group : default_group_, clock_, period, std::move(cb));
-  if (!dry_run()) {
-    exec_->add_timer(t);
-    std::lock_guard l(mu_);
-    timers_.push_back(t);
-  }
-  return t;
+  return adopt_timer(std::make_shared<TimerBase>(group ? group : default_group_, clock_, period, std::move(cb)));
 }
 
 std::shared_ptr<TimerBase> Node::create_one_shot_timer(std::chrono::nanoseconds delay, std::function<void()> cb,
                                                        std::shared_ptr<CallbackGroup> group) {
   auto t = std::make_shared<TimerBase>(group ? group : default_group_, clock_, delay, std::move(cb));
   t->set_one_shot(true);
-  if (!dry_run()) {
-    exec_->add_timer(t);
-    std::lock_guard l(mu_);
-    timers_.push_back(t);
-  }
-  return t;
+  return adopt_timer(std::move(t));
 }
 
 void Node::enable_sim_time(bool on) {

@@ -4,6 +4,7 @@
 #include <thread>
 
 #include "cairn/executor.hpp"
+#include "cairn/node.hpp"
 
 using namespace std::chrono_literals;
 using cairn::CallbackGroup;
@@ -187,4 +188,32 @@ TEST(Executor, PostRunsOnTheExecutorThreadAndOneShotTimersFireOnce) {
   t->reset();
   exec.spin_for(30ms);
   EXPECT_EQ(fired, 2) << "reset() re-arms a one-shot timer";
+}
+
+TEST(Executor, ANodeKeepsNoTimerThatCanNeverRunAgain) {
+  // A node keeps what it creates, but a fired one-shot timer whose handle was dropped can never run again: kept,
+  // a node creating one-shot timers (a timeout per request) grew its list and its executor's without bound, and
+  // the executor passes over every timer for every item it runs.
+  Executor exec;
+  cairn::NodeOptions o("timers", &exec);
+  o.start_parameter_services = false;
+  cairn::Node node(o);
+  int periodic = 0, fired = 0;
+  node.create_wall_timer(1ms, [&] { ++periodic; });  // handle dropped: still the node's, still running
+  auto held = node.create_one_shot_timer(1ms, [&] { ++fired; });
+  for (int i = 0; i < 300; ++i) {
+    node.create_one_shot_timer(1ms, [&] { ++fired; });
+    if (i % 10 == 9) exec.spin_until([&] { return fired == i + 2; }, 5s);
+  }
+  exec.spin_until([&] { return fired == 301; }, 5s);
+  EXPECT_EQ(fired, 301);
+  node.create_one_shot_timer(1h, [] {});  // a creation drops what has fired meanwhile
+  EXPECT_LE(exec.timer_count(), 4u) << "fired one-shot timers nobody holds must go";
+  // what can still run stays: the periodic timer, and the fired one-shot timer whose handle is held
+  const int before = periodic;
+  exec.spin_until([&] { return periodic > before; }, 5s);
+  EXPECT_GT(periodic, before);
+  held->reset();
+  exec.spin_until([&] { return fired == 302; }, 5s);
+  EXPECT_EQ(fired, 302) << "a held one-shot timer can be re-armed";
 }

@@ -131,6 +131,8 @@ class Executor {
   void spin_for(std::chrono::nanoseconds duration);
   void cancel();
   bool canceled() const { return canceled_.load(); }
+  /// Timers this executor serves (added and not removed).
+  std::size_t timer_count() const;
 
   /// True when the calling thread is serving this executor and a callback of `g` may run right
   /// here without breaking callback-group exclusion.

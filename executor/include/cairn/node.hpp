@@ -122,6 +122,8 @@ class Node {
  private:
   template <class E>
   void track(const std::shared_ptr<E>& e);
+  /// Adds a timer to the node and its executor, and drops the node's timers that can never run again.
+  std::shared_ptr<TimerBase> adopt_timer(std::shared_ptr<TimerBase> t);
   void record(EndpointRecord::Kind kind, const std::string& topic, const char* type, const QoS& qos);
   QoS apply_qos_override(const std::string& topic, QoS qos) const;
   void start_parameter_services();
