@@ -77,7 +77,6 @@ Stats stats(std::vector<double> v) {
   return s;
 }
 
-// SIGTERM to a child of this bench and wait for it.
 double ns_since(Clock::time_point t0) { return std::chrono::duration<double, std::nano>(Clock::now() - t0).count(); }
 
 std::string size_name(std::size_t n) {
@@ -547,7 +546,6 @@ void respawn(const std::string& self, int kills) {
 void mixed(const std::string& self, int iters) {
   cairn::Executor exec, other;
   cairn::Node node(opts("bench_mixed", exec));
-  cairn::Node node_other(opts("bench_mixed_other", other));
   auto pub = node.create_publisher<Image>("bench/flood");  // the sink process subscribes to this topic
   std::atomic<int64_t> t0_ns{0};
   std::mutex mu;
@@ -559,9 +557,13 @@ void mixed(const std::string& self, int iters) {
     lat.push_back(d);
   };
   std::thread other_thread([&] { other.spin(); });
+  int measurement = 0;
   auto measure = [&](bool inline_sub) {
-    auto sub = inline_sub ? node.create_subscription<Image>("bench/flood", cairn::QoS{}.keep_all(), record)
-                          : node_other.create_subscription<Image>("bench/flood", cairn::QoS{}.keep_all(), record);
+    // The subscription's own node, gone after the measurement: a node keeps its subscriptions for its lifetime,
+    // so subscriptions of earlier measurements on `node`/`node_other` stayed on the channel and each later
+    // measurement also timed them (an inline one first, a queued one's wake-up before the measured callback).
+    cairn::Node sub_node(opts("bench_mixed_sub" + std::to_string(++measurement), inline_sub ? exec : other));
+    auto sub = sub_node.create_subscription<Image>("bench/flood", cairn::QoS{}.keep_all(), record);
     {
       std::lock_guard l(mu);
       lat.clear();

@@ -4,7 +4,9 @@
 #include <atomic>
 #include <cstdlib>
 #include <new>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "cairn/node.hpp"
@@ -180,6 +182,56 @@ TEST(DdsPath, TwoContextsTalkOverDdsAndLocalReadersGetNoSecondCopy) {
   EXPECT_EQ(remote_info.publisher_gid, pub->gid());
   EXPECT_EQ(remote_info.sequence_number, 3u);
   EXPECT_GT(remote_info.source_timestamp_ns, 0);
+}
+
+TEST(DdsPath, OtherProcessesGetWhatWasPublishedWhateverLocalSubscribersDo) {
+  // The DDS leg is written after inline deliveries to sharing subscribers (so their latency does not include the
+  // write) but before an owning subscriber gets the object: an owner may change or free it. Here an inline owner
+  // empties each message it takes; the remote reader must still get every message as published, and the local
+  // sharer too. (Writing after the owner's delivery sends the emptied message, or a freed one.)
+  Executor exec;
+  auto ctx_a = cairn::Context::create();
+  auto ctx_b = cairn::Context::create();
+  Node a(opts("talker", exec, ctx_a));
+  Node b(opts("remote_listener", exec, ctx_b));
+  auto pub = a.create_publisher<String>("chatter_owned");
+  std::vector<std::string> remote, shared;
+  int owned = 0;
+  auto rs = b.create_subscription<String>("chatter_owned", cairn::QoS{}.keep_all(),
+                                          [&](const String& m) { remote.push_back(m.data); });
+  ASSERT_TRUE(exec.spin_until([&] { return pub->inter_process_subscription_count() == 1; }, 10s));
+  auto publish_all = [&](int from) {
+    bool done = false;
+    auto t = a.create_wall_timer(1ms, [&] {  // from the executor thread: local delivery is inline
+      if (done) return;
+      for (int i = from; i < from + 5; ++i) {
+        auto m = std::make_unique<String>();
+        m->data = "message " + std::to_string(i);
+        pub->publish(std::move(m));
+      }
+      done = true;
+    });
+    exec.spin_until([&] { return done; }, 5s);
+    t->cancel();
+  };
+  {
+    Node owner_node(opts("owner", exec, ctx_a));  // its subscription ends with it
+    auto owner = owner_node.create_subscription<String>("chatter_owned", cairn::QoS{}, [&](std::unique_ptr<String> m) {
+      m->data.clear();  // the owner's object, to do with as it likes
+      ++owned;
+    });
+    publish_all(0);
+    exec.spin_until([&] { return remote.size() == 5; }, 10s);
+  }
+  auto sharer = a.create_subscription<String>("chatter_owned", cairn::QoS{},
+                                              [&](const String& m) { shared.push_back(m.data); });
+  publish_all(5);
+  exec.spin_until([&] { return remote.size() == 10; }, 10s);
+  EXPECT_EQ(owned, 5);
+  ASSERT_EQ(remote.size(), 10u);
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(remote[static_cast<std::size_t>(i)], "message " + std::to_string(i));
+  ASSERT_EQ(shared.size(), 5u);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(shared[static_cast<std::size_t>(i)], "message " + std::to_string(i + 5));
 }
 
 TEST(DdsPath, TransientLocalReachesLateJoinersInAndOutOfProcess) {

@@ -17,6 +17,7 @@
 #include <stdexcept>
 #include <string>
 #include <typeindex>
+#include <utility>
 #include <vector>
 
 #include "cairn/message_info.hpp"
@@ -83,6 +84,15 @@ class Channel : public ChannelBase {
 
   /// Delivers `msg`; `latch_depth` > 0 keeps the last latch_depth messages for late joiners.
   void publish(std::unique_ptr<T> msg, const MessageInfo& info, int latch_depth = 0) {
+    publish(std::move(msg), info, latch_depth, [](const T&) {});
+  }
+
+  /// Delivers `msg` and hands it to `also` (the publisher's DDS leg) while it is still valid: after the local
+  /// deliveries when every subscription shares it (local latency then does not include the DDS write; readers on
+  /// other threads only read the object meanwhile), before them when a subscription takes ownership (the object
+  /// may be gone afterwards) or there is none.
+  template <class F>
+  void publish(std::unique_ptr<T> msg, const MessageInfo& info, int latch_depth, F&& also) {
     std::shared_ptr<const SinkList> sinks;
     {
       std::lock_guard l(mu_);
@@ -91,6 +101,8 @@ class Channel : public ChannelBase {
     std::size_t owners = 0;
     for (const auto& s : *sinks) owners += s->wants_ownership() ? 1 : 0;
     const std::size_t sharers = sinks->size() - owners;
+    const bool also_first = owners > 0 || sinks->empty();
+    if (also_first) also(std::as_const(*msg));
     if (latch_depth == 0 && sharers == 0) {
       // owners only: k-1 copies, the last owner gets the original object
       std::size_t seen = 0;
@@ -111,6 +123,7 @@ class Channel : public ChannelBase {
         s->deliver_shared(shared, info);
       }
     }
+    if (!also_first) also(*shared);
     if (latch_depth > 0) {
       std::lock_guard l(mu_);
       latched_.push_back(std::move(shared));

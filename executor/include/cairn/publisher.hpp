@@ -47,17 +47,16 @@ class Publisher : public PublisherBase {
     info.publisher_gid = gid_;
     info.sequence_number = ++seq_;
     info.from_intra_process = true;
-    // The DDS leg serializes first, while the object is still ours; DDS readers of this process are
-    // ignored (ignore_local), so they never see it twice. Transient-local writers always write so that
-    // late joiners in other processes get the history.
-    if (dds_ && (latch_ > 0 || dds_->matched() > 0)) {
-      try {
-        dds_->write(msg.get(), info.source_timestamp_ns);
-      } catch (const std::exception& e) {
-        CAIRN_ERROR(logger_, "publish on " << topic_ << ": " << e.what());
-      }
+    // DDS readers of this process are ignored (ignore_local), so they never see it twice. Transient-local writers
+    // always write so that late joiners in other processes get the history. The channel calls the DDS leg after
+    // delivering to sharing local subscriptions (their latency does not include the write) and before delivering
+    // to an owning one (which may take this very object).
+    auto write_dds = [&](const T& m) { write_to_dds(m, info.source_timestamp_ns); };
+    if (channel_) {
+      channel_->publish(std::move(msg), info, latch_, write_dds);
+    } else {
+      write_dds(*msg);
     }
-    if (channel_) channel_->publish(std::move(msg), info, latch_);
   }
   /// Publishes `msg`: serialized from the reference for other processes; copied once only if a subscription
   /// in this process wants it (prefer the unique_ptr overload when there are local subscribers).
@@ -66,16 +65,8 @@ class Publisher : public PublisherBase {
       publish(std::make_unique<T>(msg));
       return;
     }
-    MessageInfo info;
-    info.source_timestamp_ns = clock_->now().ns;
     ++seq_;
-    if (dds_ && (latch_ > 0 || dds_->matched() > 0)) {
-      try {
-        dds_->write(&msg, info.source_timestamp_ns);
-      } catch (const std::exception& e) {
-        CAIRN_ERROR(logger_, "publish on " << topic_ << ": " << e.what());
-      }
-    }
+    write_to_dds(msg, clock_->now().ns);
   }
 
   /// Sends what a batching publisher (QoS::batching) has queued for other processes; a no-op otherwise.
@@ -96,6 +87,16 @@ class Publisher : public PublisherBase {
   }
 
  private:
+  /// The DDS leg: written when another process listens, or always for transient local (late joiners).
+  void write_to_dds(const T& m, int64_t stamp_ns) {
+    if (!dds_ || (latch_ == 0 && dds_->matched() == 0)) return;
+    try {
+      dds_->write(&m, stamp_ns);
+    } catch (const std::exception& e) {
+      CAIRN_ERROR(logger_, "publish on " << topic_ << ": " << e.what());
+    }
+  }
+
   std::shared_ptr<Channel<T>> channel_;
   std::unique_ptr<DdsWriter> dds_;
   Gid gid_;
