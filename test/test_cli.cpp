@@ -158,6 +158,76 @@ TEST(Cli, CrashedIsolatedComponentIsRespawned) {
   EXPECT_EQ(stop(launch), 0);
 }
 
+TEST(Cli, ASlowReloadHoldsUpNeitherSupervisionNorStop) {
+  // A respawned container whose component takes long to load again (here: while a file exists) is loaded by the
+  // supervision loop step by step: meanwhile another child is still respawned, and SIGTERM stops the launch
+  // without waiting for the load. (The reload used to block the loop for up to load_timeout + 5 s.)
+  const std::string tag = std::to_string(getpid());
+  const std::string gate = "/tmp/cairn_test_gate_" + tag;
+  const std::string spec = "/tmp/cairn_test_reload_" + tag + ".yaml";
+  const std::string log = tmp_log("reload");
+  std::remove(gate.c_str());
+  {
+    std::ofstream f(spec);
+    f << "load_timeout: 120\n"
+         "containers:\n  - name: slow" << tag << "\n    components:\n"
+         "      - class: cairn_test::Hangs\n        params: {seconds: 120.0, while_file: " << gate << "}\n"
+         "processes:\n  - name: ticker\n    cmd: [sleep, '0.2']\n    respawn: true\n    respawn_delay: 0.05\n";
+  }
+  const pid_t launch = cairn::testing::start(kCairn + " launch " + spec, log);
+  ASSERT_TRUE(wait_for_text(log, "loaded cairn_test::Hangs as /hangs into slow" + tag, 1, 30s)) << slurp(log);
+  { std::ofstream(gate.c_str()) << "hang\n"; }
+  ASSERT_EQ(run("pkill -KILL -f 'container --name slo[w]" + tag + "'").exit_code, 0);
+  ASSERT_TRUE(wait_for_text(log, "respawning container slow" + tag, 1, 10s)) << slurp(log);
+  const int ticks = count(slurp(log), "respawning process ticker");
+  EXPECT_TRUE(wait_for_text(log, "respawning process ticker", ticks + 3, 10s))
+      << "no process respawned while a container reloads:\n" << slurp(log);
+  EXPECT_EQ(count(slurp(log), "loaded cairn_test::Hangs as /hangs into slow" + tag), 1) << "the reload is not hanging";
+  kill(launch, SIGTERM);
+  int st = -1;
+  for (int i = 0; i < 200 && waitpid(launch, &st, WNOHANG) == 0; ++i) std::this_thread::sleep_for(50ms);
+  if (st == -1) {  // still running after 10 s: the stop waited for the load
+    kill(launch, SIGKILL);
+    waitpid(launch, &st, 0);
+    ADD_FAILURE() << "SIGTERM did not stop the launch while a reload was hanging:\n" << slurp(log);
+  } else {
+    EXPECT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0) << slurp(log);
+  }
+  EXPECT_EQ(run("pgrep -f 'container --name slo[w]" + tag + "'").exit_code, 1) << "the container outlived the launch";
+  std::remove(gate.c_str());
+  std::remove(spec.c_str());
+}
+
+TEST(Cli, AContainerDyingDuringStartUpFollowsItsRespawnPolicy) {
+  // While another container is still loading (Hangs, 2 s), an isolated component crashes 0.2 s after its load:
+  // with respawn it is restarted and the launch starts up; without, the launch ends at once with one line.
+  const std::string tag = std::to_string(getpid());
+  const std::string spec = "/tmp/cairn_test_startup_" + tag + ".yaml";
+  auto write = [&](bool respawn) {
+    std::ofstream f(spec);
+    f << "containers:\n  - name: up" << tag << "\n    respawn: " << (respawn ? "true" : "false") << "\n    components:\n"
+         "      - class: cairn_test::Crashes\n        params: {crash_after: 0.2}\n        isolated: true\n"
+         "      - class: cairn_test::Hangs\n        params: {seconds: 2.0}\n";
+  };
+  write(false);
+  auto r = run(kCairn + " launch " + spec + " --duration 1 2>&1");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("cairn: " + spec + ": container up" + tag +
+                          "__crashes killed by signal 11 (SIGSEGV) during start-up; respawn is off\n"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(count(r.output, "running 2 containers"), 0) << r.output;
+  write(true);
+  r = run(kCairn + " launch " + spec + " --duration 1 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const auto respawned = r.output.find("respawning container up" + tag + "__crashes (restart 1)");
+  const auto running = r.output.find("running 2 containers, 2 components");
+  EXPECT_NE(respawned, std::string::npos) << r.output;
+  EXPECT_NE(running, std::string::npos) << r.output;
+  EXPECT_LT(respawned, running) << "respawned during start-up:\n" << r.output;
+  std::remove(spec.c_str());
+}
+
 TEST(Cli, LaunchExitsNonZeroWhenAProcessFailsAndStopsWholeProcessGroups) {
   // A process that fails (not respawned) makes the launch exit 1 with one line naming it (it always exited 0, so
   // scripts/demo.sh passed with failing processes); a process's own children are stopped with it (they were left

@@ -429,10 +429,19 @@ struct Supervised {
   }
 };
 
+using LoadClient = Client<composition_interfaces::srv::LoadNode_Request, composition_interfaces::srv::LoadNode_Response>;
+
+/// A supervised container. Loading its components is a state advanced by the supervision loop (never waited
+/// for), so that a slow (re)load holds up neither the other children's supervision nor a stop.
 struct RunningContainer : Supervised {
   std::string name;
   std::size_t threads = 1;
   std::vector<const LaunchComponent*> components;
+  std::shared_ptr<LoadClient> client;  ///< of the current process's load_node service
+  std::size_t loaded = 0;              ///< components loaded into the current process
+  std::optional<LoadClient::Pending> call;  ///< the load request in flight
+  SteadyTime service_deadline{};       ///< the current process must offer load_node by then
+  bool serving() const { return pid > 0 && loaded == components.size(); }
 };
 
 struct RunningProcess : Supervised {
@@ -549,37 +558,49 @@ int run_launch_main(int argc, char** argv) {
   Node node(no);
   const auto load_timeout = std::chrono::milliseconds(static_cast<int64_t>(spec.load_timeout_s * 1000));
 
-  auto start = [&](RunningContainer& rc) -> bool {
+  // Re-sent every 100 ms until answered (the container answers a re-sent request once). After a respawn the killed
+  // container's endpoints stay matched until their DDS lease expires, so its load_node service looks ready at once
+  // and the first request can go to the dead process only; with a 1 s re-send a respawned container served again
+  // ~1.1 s after the crash, with 100 ms ~0.22 s (`cairn bench ipc --only respawn`).
+  constexpr auto kLoadResend = std::chrono::milliseconds(100);
+  constexpr auto kServiceWait = std::chrono::seconds(20);
+  auto spawn = [&](RunningContainer& rc) {
     rc.started = std::chrono::steady_clock::now();
     rc.due = SteadyTime::max();
+    rc.loaded = 0;
+    rc.call.reset();
+    rc.client = node.create_client<composition_interfaces::srv::LoadNode_Request,
+                                   composition_interfaces::srv::LoadNode_Response>("/" + rc.name + "/_container/load_node");
+    rc.service_deadline = rc.started + kServiceWait;
     rc.pid = spawn_process({self, "container", "--name", rc.name, "--threads", std::to_string(rc.threads),
                             "--load-timeout", std::to_string(spec.load_timeout_s)});
-    auto client = node.create_client<composition_interfaces::srv::LoadNode_Request,
-                                     composition_interfaces::srv::LoadNode_Response>("/" + rc.name +
-                                                                                     "/_container/load_node");
-    if (!client->wait_for_service(std::chrono::seconds(20))) {
-      CAIRN_ERROR(log, "container " << rc.name << " did not offer its load_node service within 20 s");
-      return false;
-    }
-    // Re-sent every 100 ms until answered (the container answers a re-sent request once). After a respawn the
-    // killed container's endpoints stay matched until their DDS lease expires, so wait_for_service returns at once
-    // and the first request can go to the dead process only; with call()'s default 1 s re-send a respawned
-    // container served again ~1.1 s after the crash, with 100 ms ~0.22 s (`cairn bench ipc --only respawn`).
-    constexpr auto kLoadResend = std::chrono::milliseconds(100);
-    for (const auto* comp : rc.components) {
-      auto resp = client->call(load_request(*comp), load_timeout + std::chrono::seconds(5), kLoadResend);
+  };
+  // Advances a started container's loading without blocking: returns an error ("file:line: ...") when it cannot
+  // be loaded, else "" (still loading, or serving).
+  auto advance = [&](RunningContainer& rc) -> std::string {
+    while (rc.pid > 0 && !rc.serving()) {
+      const auto now = std::chrono::steady_clock::now();
+      const LaunchComponent& comp = *rc.components[rc.loaded];
+      if (!rc.call) {
+        if (!rc.client->service_is_ready()) {
+          if (now < rc.service_deadline) return "";
+          return spec.file + ": container " + rc.name + " did not offer its load_node service within " +
+                 std::to_string(kServiceWait.count()) + " s";
+        }
+        rc.call = rc.client->send(load_request(comp), load_timeout + std::chrono::seconds(5), kLoadResend);
+      }
+      auto resp = rc.client->poll(*rc.call, now);
+      if (!resp && !rc.call->expired) return "";
+      rc.call.reset();
       if (!resp) {
-        std::cerr << "cairn: " << spec.file << ":" << comp->line << ": " << comp->fqn() << ": no reply from container "
-                  << rc.name << " to the load request\n";
-        return false;
+        return spec.file + ":" + std::to_string(comp.line) + ": " + comp.fqn() + ": no reply from container " +
+               rc.name + " to the load request";
       }
-      if (!resp->success) {
-        std::cerr << "cairn: " << spec.file << ":" << comp->line << ": " << resp->error_message << "\n";
-        return false;
-      }
-      CAIRN_INFO(log, "loaded " << comp->class_name << " as " << resp->full_node_name << " into " << rc.name);
+      if (!resp->success) return spec.file + ":" + std::to_string(comp.line) + ": " + resp->error_message;
+      CAIRN_INFO(log, "loaded " << comp.class_name << " as " << resp->full_node_name << " into " << rc.name);
+      ++rc.loaded;
     }
-    return true;
+    return "";
   };
 
   std::vector<RunningProcess> procs;
@@ -594,61 +615,68 @@ int run_launch_main(int argc, char** argv) {
     rp.due = SteadyTime::max();
     rp.pid = spawn_process(rp.spec->cmd);
   };
-
+  // Start-up: every container is started at once and loaded; the processes start when all containers serve. Until
+  // then a container that cannot be started or loaded, or dies without respawn, ends the launch (exit 1, one line).
+  auto fail_startup = [&](const std::string& what) {
+    std::cerr << "cairn: " << what << "\n";
+    stop_processes(all_pids());
+    return 1;
+  };
   for (auto& rc : containers) {
-    bool ok = false;
     try {
-      ok = start(rc);
+      spawn(rc);
     } catch (const std::exception& e) {
-      std::cerr << "cairn: " << spec.file << ": container " << rc.name << ": " << e.what() << "\n";
-    }
-    if (!ok) {
-      stop_processes(all_pids());
-      return 1;
+      return fail_startup(spec.file + ": container " + rc.name + ": " + e.what());
     }
   }
-  for (const auto& p : spec.processes) {
-    try {
-      RunningProcess rp;
-      rp.spec = &p;
-      rp.policy = p.respawn;
-      procs.push_back(rp);
-      start_process(procs.back());
-    } catch (const std::exception& e) {
-      std::cerr << "cairn: " << spec.file << ":" << p.line << ": process " << p.name << ": " << e.what() << "\n";
-      stop_processes(all_pids());
-      return 1;
-    }
-  }
-  CAIRN_INFO(log, "running " << containers.size() << " containers, " << ncomp << " components, " << procs.size()
-                             << " processes" << (duration > 0 ? " for " + std::to_string(duration) + " s" : ""));
-
-  const auto t_end = duration > 0 ? std::chrono::steady_clock::now() + std::chrono::milliseconds(int64_t(duration * 1000))
-                                  : std::chrono::steady_clock::time_point::max();
+  bool started_up = false;
+  auto t_end = std::chrono::steady_clock::time_point::max();
   // What ended without being respawned: a container (they run until stopped) or a process that failed. Any of
   // them makes the launch exit 1, so that a script running a spec (scripts/demo.sh) sees it.
   std::vector<std::string> failures;
   while (!Executor::signal_received() && std::chrono::steady_clock::now() < t_end) {
     const auto now = std::chrono::steady_clock::now();
-    // Respawns whose backoff has passed.
+    // Respawns whose backoff has passed, and loading (a step at a time: nothing here waits).
+    bool loading = false, all_serving = true;
     for (auto& rc : containers) {
-      if (rc.pid > 0 || rc.due > now) continue;
-      CAIRN_WARN(log, "respawning container " << rc.name << " (restart " << rc.restarts << ")");
-      bool ok = false;
-      try {
-        ok = start(rc);
-      } catch (const std::exception& e) {
-        CAIRN_ERROR(log, "respawn of " << rc.name << " failed: " << e.what());
-        if (rc.pid <= 0) rc.died(std::chrono::steady_clock::now());  // not even started: try again after the backoff
+      if (rc.pid <= 0 && rc.due <= now) {
+        CAIRN_WARN(log, "respawning container " << rc.name << " (restart " << rc.restarts << ")");
+        try {
+          spawn(rc);
+        } catch (const std::exception& e) {
+          if (!started_up) return fail_startup(spec.file + ": container " + rc.name + ": " + e.what());
+          const double d = rc.died(std::chrono::steady_clock::now());  // not even started: try again after the backoff
+          CAIRN_ERROR(log, "respawn of " << rc.name << " failed: " << e.what() << "; trying again in " << d << " s");
+          continue;
+        }
       }
-      if (!ok && rc.pid > 0) {
+      const std::string error = advance(rc);
+      if (!error.empty() && !started_up) return fail_startup(error);
+      if (!error.empty()) {
         // Running but without its components: stop it and try again after the next backoff.
         stop_processes({rc.pid});
         const double d = rc.died(std::chrono::steady_clock::now());
-        CAIRN_ERROR(log, "container " << rc.name << " could not be restarted; trying again in " << d << " s");
-      } else if (!ok) {
-        CAIRN_ERROR(log, "container " << rc.name << " could not be restarted");
+        CAIRN_ERROR(log, error << "; container " << rc.name << " stopped, trying again in " << d << " s");
       }
+      loading = loading || (rc.pid > 0 && !rc.serving());
+      all_serving = all_serving && rc.serving();
+    }
+    if (!started_up && all_serving) {
+      started_up = true;
+      for (const auto& p : spec.processes) {
+        try {
+          RunningProcess rp;
+          rp.spec = &p;
+          rp.policy = p.respawn;
+          procs.push_back(rp);
+          start_process(procs.back());
+        } catch (const std::exception& e) {
+          return fail_startup(spec.file + ":" + std::to_string(p.line) + ": process " + p.name + ": " + e.what());
+        }
+      }
+      CAIRN_INFO(log, "running " << containers.size() << " containers, " << ncomp << " components, " << procs.size()
+                                 << " processes" << (duration > 0 ? " for " + std::to_string(duration) + " s" : ""));
+      if (duration > 0) t_end = std::chrono::steady_clock::now() + std::chrono::milliseconds(int64_t(duration * 1000));
     }
     for (auto& rp : procs) {
       if (rp.pid > 0 || rp.due > now) continue;
@@ -663,7 +691,7 @@ int run_launch_main(int argc, char** argv) {
     int status = 0;
     const pid_t pid = waitpid(-1, &status, WNOHANG);
     if (pid <= 0) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      std::this_thread::sleep_for(std::chrono::milliseconds(loading ? 2 : 50));
       continue;
     }
     auto backoff = [](double d) {
@@ -673,8 +701,12 @@ int run_launch_main(int argc, char** argv) {
     };
     for (auto& rc : containers) {
       if (rc.pid != pid) continue;
+      rc.call.reset();
       const double d = rc.died(std::chrono::steady_clock::now());
-      if (d < 0) {
+      if (d < 0 && !started_up) {
+        return fail_startup(spec.file + ": container " + rc.name + " " + describe_wait_status(status) +
+                            " during start-up; respawn is off");
+      } else if (d < 0) {
         CAIRN_ERROR(log, "container " << rc.name << " " << describe_wait_status(status) << "; respawn is off");
         failures.push_back("container " + rc.name + " " + describe_wait_status(status));
       } else {

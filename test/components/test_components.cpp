@@ -1,6 +1,7 @@
 // Components that misbehave on purpose, for the container, launch and supervision tests.
 #include <chrono>
 #include <csignal>
+#include <filesystem>
 #include <stdexcept>
 #include <thread>
 
@@ -16,12 +17,20 @@ class Throws : public cairn::Node {
   explicit Throws(const cairn::NodeOptions& o) : cairn::Node(o) { throw std::runtime_error("deliberate failure"); }
 };
 
-/// Takes `seconds` to construct (default 30): the container's load timeout must catch it.
+/// Takes `seconds` to construct (default 30): the container's load timeout must catch it. With `while_file`
+/// set it hangs only while that file exists (at most `seconds`), so a test can make a reload hang and not the
+/// first load.
 class Hangs : public cairn::Node {
  public:
   explicit Hangs(const cairn::NodeOptions& o) : cairn::Node(o) {
     const double s = declare_parameter<double>("seconds", 30.0);
-    if (!dry_run()) std::this_thread::sleep_for(std::chrono::duration<double>(s));
+    const std::string file = declare_parameter<std::string>("while_file", "");
+    if (dry_run()) return;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(s);
+    if (file.empty()) std::this_thread::sleep_until(until);
+    while (!file.empty() && std::filesystem::exists(file) && std::chrono::steady_clock::now() < until) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
   }
 };
 

@@ -8,6 +8,7 @@
 #ifndef CAIRN_SERVICE_HPP
 #define CAIRN_SERVICE_HPP
 
+#include <algorithm>
 #include <chrono>
 #include <deque>
 #include <functional>
@@ -202,7 +203,66 @@ class Client {
   }
 
   /// Sends without waiting for discovery; prefer call() or wait_for_service() first.
-  std::future<Resp> async_send(Req req) {
+  std::future<Resp> async_send(Req req) { return enqueue(req); }
+
+  /// A request in flight (send()): poll() it until it is answered or its deadline passes.
+  struct Pending {
+    Req req;  ///< as sent, header included: a re-send has the same id, so the server answers it once
+    std::future<Resp> reply;
+    std::chrono::steady_clock::time_point deadline, next_send;
+    std::chrono::nanoseconds resend_interval{};
+    bool expired = false;  ///< the deadline passed without a reply (the request is forgotten)
+  };
+
+  /// Sends `req` now (without waiting for discovery) and returns it to be polled; it expires after `timeout`.
+  Pending send(Req req, std::chrono::nanoseconds timeout,
+               std::chrono::nanoseconds resend_interval = std::chrono::seconds(1)) {
+    Pending p;
+    p.reply = enqueue(req);
+    p.req = std::move(req);
+    const auto now = std::chrono::steady_clock::now();
+    p.deadline = now + timeout;
+    p.resend_interval = resend_interval;
+    p.next_send = now + resend_interval;
+    return p;
+  }
+
+  /// Waits for `p`'s reply until `until` at most (a time already past: does not wait), re-sending it every
+  /// resend interval meanwhile. The reply, or nullopt: not yet, or `p.expired` once the deadline has passed.
+  std::optional<Resp> poll(Pending& p, std::chrono::steady_clock::time_point until) {
+    if (p.expired || !p.reply.valid()) return std::nullopt;
+    for (;;) {
+      const auto stop = std::min({until, p.deadline, p.next_send});
+      if (p.reply.wait_until(stop) == std::future_status::ready) return p.reply.get();
+      const auto now = std::chrono::steady_clock::now();
+      if (now >= p.deadline) {
+        p.expired = true;
+        std::lock_guard l(mu_);
+        pending_.erase(p.req.request_header.sequence_number);
+        return std::nullopt;
+      }
+      if (now >= p.next_send) {
+        writer_->write(&p.req, 0);
+        p.next_send = now + p.resend_interval;
+      }
+      if (now >= until) return std::nullopt;
+    }
+  }
+
+  /// Waits for the service (at most `timeout`), sends, and waits for the reply within what is left of
+  /// `timeout`, re-sending the same request every `resend_interval`. nullopt on timeout.
+  std::optional<Resp> call(Req req, std::chrono::nanoseconds timeout,
+                           std::chrono::nanoseconds resend_interval = std::chrono::seconds(1)) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    if (!wait_for_service(timeout)) return std::nullopt;
+    auto p = send(std::move(req), deadline - std::chrono::steady_clock::now(), resend_interval);
+    return poll(p, p.deadline);
+  }
+
+ private:
+  /// Gives `req` this client's id and the next sequence number (together with its pending entry: another thread
+  /// may send meanwhile), sends it, and returns the future of its reply.
+  std::future<Resp> enqueue(Req& req) {
     std::promise<Resp> p;
     auto f = p.get_future();
     {
@@ -215,30 +275,6 @@ class Client {
     return f;
   }
 
-  /// Waits for the service (at most `timeout`), sends, and waits for the reply within what is left of
-  /// `timeout`, re-sending the same request every `resend_interval`. nullopt on timeout.
-  std::optional<Resp> call(Req req, std::chrono::nanoseconds timeout,
-                           std::chrono::nanoseconds resend_interval = std::chrono::seconds(1)) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    if (!wait_for_service(timeout)) return std::nullopt;
-    auto f = async_send(req);
-    {
-      std::lock_guard l(mu_);
-      req.request_header.client_guid = client_id_;
-      req.request_header.sequence_number = seq_;
-    }
-    for (;;) {
-      const auto next = std::min(deadline, std::chrono::steady_clock::now() + resend_interval);
-      if (f.wait_until(next) == std::future_status::ready) return f.get();
-      if (std::chrono::steady_clock::now() >= deadline) break;
-      writer_->write(&req, 0);  // same client id and sequence number: the server answers it once
-    }
-    std::lock_guard l(mu_);
-    pending_.erase(req.request_header.sequence_number);
-    return std::nullopt;
-  }
-
- private:
   void on_reply(DdsReader& reader) {
     std::lock_guard l(mu_);
     for (;;) {
