@@ -33,6 +33,24 @@ bool within(const Pose2& d, double max_translation, double max_rotation) {
   return !(d.t.norm() > max_translation || std::abs(normalizeAngle(d.theta)) > max_rotation);
 }
 
+}  // namespace
+
+bool loopMatchesConfirm(const Pose2& a_map_to_local, double a_axis_ratio, const Pose2& b_map_to_local,
+                        double b_axis_ratio, const SlamOptions& o) {
+  // Two matches degenerate along an axis (a corridor) alias the same way — neighbouring scans of one corridor
+  // are matched equally far off along it — so they are no independent evidence of where along it the loop is.
+  if (a_axis_ratio < o.loop_confirm_min_axis_ratio && b_axis_ratio < o.loop_confirm_min_axis_ratio) return false;
+  return within(between(a_map_to_local, b_map_to_local), o.loop_confirm_translation, o.loop_confirm_rotation);
+}
+
+double translationInformationRatio(const Eigen::Matrix3d& information) {
+  const Eigen::Vector2d ev =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(information.topLeftCorner<2, 2>()).eigenvalues();
+  return ev(1) > 0.0 ? std::max(0.0, ev(0)) / ev(1) : 0.0;
+}
+
+namespace {
+
 /// Global detections agree on where the query trajectory sits when their implied local->map transforms are
 /// within these bounds (2D reading of Stüde's r_ver rule; chosen, see README).
 constexpr double kPlacementTranslation = 0.5, kPlacementRotation = 0.2;
@@ -400,6 +418,7 @@ std::optional<LoopMatch> GraphSlam::Impl::matchSubmap(const LoopQuery& q, std::i
   Eigen::Matrix3d Rq = Eigen::Matrix3d::Identity();
   Rq.topLeftCorner<2, 2>() = rot(ref.pose.theta);
   lm.information = (Rq.transpose() * cov * Rq).inverse();
+  lm.axis_ratio = translationInformationRatio(lm.information);
   lm.score = ref.score;
   lm.implied_query_global = compose(k.global_pose, lm.z);
   lm.implied_map_to_local = compose(lm.implied_query_global, inverse(q.local_pose));
@@ -497,8 +516,7 @@ std::vector<LoopMatch> GraphSlam::Impl::confirmLocal(const std::vector<LoopMatch
     for (std::size_t i = 0; i < pending_local.size(); ++i) {
       const LoopMatch& o = pending_local[i];
       if (o.query == m.query) continue;  // another match of the same scan is not an independent confirmation
-      if (within(between(m.implied_map_to_local, o.implied_map_to_local), options.loop_confirm_translation,
-                 options.loop_confirm_rotation))
+      if (loopMatchesConfirm(m.implied_map_to_local, m.axis_ratio, o.implied_map_to_local, o.axis_ratio, options))
         agree.push_back(i);
     }
     if (static_cast<int>(agree.size()) >= options.loop_confirmations) {

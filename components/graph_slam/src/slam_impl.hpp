@@ -37,6 +37,7 @@ struct LoopMatch {
   Pose2 implied_query_global;  ///< global(k) ∘ z
   Pose2 implied_map_to_local;  ///< the query trajectory's local frame in the map frame, as this match implies
   std::int64_t query = -1;     ///< query node (-1: localization query)
+  double axis_ratio = 1.0;     ///< translationInformationRatio(information): near 0 along a corridor
 };
 
 /// A loop-closure candidate node and its ranking score (verifier score, or −distance without a verifier).

@@ -104,6 +104,9 @@ std::vector<SlamParam> makeTable() {
   t.push_back(param("loop_confirm_window", "nodes a pending loop match waits for confirmation", &SlamOptions::loop_confirm_window, 1, 1e6));
   t.push_back(param("loop_confirm_translation", "agreement of confirming matches (m)", &SlamOptions::loop_confirm_translation, 0, 100));
   t.push_back(param("loop_confirm_rotation", "agreement of confirming matches (rad)", &SlamOptions::loop_confirm_rotation, 0, 3.2));
+  t.push_back(param("loop_confirm_min_axis_ratio",
+                    "two matches both below this translation-information eigenvalue ratio (corridors) do not confirm each other",
+                    &SlamOptions::loop_confirm_min_axis_ratio, 0, 1));
   t.push_back(param("loop_readmit_min_set", "agreeing suppressed loops re-admitted with loop_readmit_kernel (0: off)",
                     &SlamOptions::loop_readmit_min_set, 0, 1000));
   t.push_back(param("loop_readmit_window", "nodes back in which suppressed loops are checked for agreement",

@@ -239,6 +239,32 @@ NewSessionRun extendApartmentMap(const gs::SlamOptions& o, double map_seconds, d
 
 }  // namespace
 
+TEST(GraphSlam, TwoCorridorMatchesDoNotConfirmEachOther) {
+  // Neighbouring scans of a corridor are matched equally far off along its axis (ACES: 2.4–3 m), so two matches
+  // that are both degenerate along an axis agree without being independent evidence; a match that constrains
+  // both directions can confirm a degenerate one.
+  gs::SlamOptions o;
+  gs::Pose2 a, b, far;
+  a.t = {1.0, 2.0};
+  b.t = {1.1, 2.05};
+  far.t = {1.6, 2.0};
+  const double corridor = 0.02, room = 0.8;
+  EXPECT_FALSE(gs::loopMatchesConfirm(a, corridor, b, corridor, o));
+  EXPECT_TRUE(gs::loopMatchesConfirm(a, corridor, b, room, o));
+  EXPECT_TRUE(gs::loopMatchesConfirm(a, room, b, corridor, o));
+  EXPECT_TRUE(gs::loopMatchesConfirm(a, room, b, room, o));
+  EXPECT_FALSE(gs::loopMatchesConfirm(a, room, far, room, o));  // 0.6 m apart: they disagree
+  o.loop_confirm_min_axis_ratio = 0.0;                           // off: agreement alone, as before
+  EXPECT_TRUE(gs::loopMatchesConfirm(a, corridor, b, corridor, o));
+  // The ratio of a match: λ_min/λ_max of its translation information, whatever the corridor's direction.
+  Eigen::Matrix3d along_x = Eigen::Vector3d(4.0, 400.0, 1000.0).asDiagonal();
+  EXPECT_NEAR(gs::translationInformationRatio(along_x), 0.01, 1e-12);
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  R.topLeftCorner<2, 2>() << std::cos(0.7), -std::sin(0.7), std::sin(0.7), std::cos(0.7);
+  EXPECT_NEAR(gs::translationInformationRatio(R.transpose() * along_x * R), 0.01, 1e-9);
+  EXPECT_NEAR(gs::translationInformationRatio(Eigen::Matrix3d::Identity()), 1.0, 1e-12);
+}
+
 TEST(GraphSlam, ClosesASimulatedLoopAndEndsCloserToTheTruthThanWithout) {
   const SimRun& run = outAndBack();
   ASSERT_GT(run.scans.size(), 500u);

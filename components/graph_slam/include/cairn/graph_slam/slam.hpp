@@ -99,6 +99,10 @@ struct SlamOptions {
   int loop_confirm_window = 30;
   double loop_confirm_translation = 0.3;
   double loop_confirm_rotation = 0.05;
+  /// Two matches whose translation information is degenerate (λ_min/λ_max below this: a corridor) do not confirm
+  /// each other: neighbouring scans of a corridor alias alike along its axis. One of them must constrain both
+  /// directions (ours; chosen on the Freiburg logs, docs/benchmarks.md). 0: off.
+  double loop_confirm_min_axis_ratio = 0.3;
   /// Re-admission of agreeing loops (ours, after the pairwise consistency of PCM, Mangelson et al. ICRA 2018).
   /// DCS judges each loop against the current estimate, so a run of correct loops that all ask for the same
   /// large correction (drift along a corridor, a trajectory placed by a global search) is switched off loop by
@@ -156,6 +160,17 @@ struct SlamOptions {
   /// session's scan poses: a robot that reloads and re-saves its map every day then keeps a bounded file.
   bool load_scan_records = true;
 };
+
+/// Whether two local loop matches confirm each other (SlamOptions::loop_confirmations): they agree on the query
+/// trajectory's placement (implied map->local transforms within loop_confirm_translation / _rotation) and at
+/// least one of them is not degenerate along an axis (its translationInformationRatio is at least
+/// loop_confirm_min_axis_ratio).
+bool loopMatchesConfirm(const Pose2& a_map_to_local, double a_axis_ratio, const Pose2& b_map_to_local,
+                        double b_axis_ratio, const SlamOptions& o);
+
+/// λ_min / λ_max of the translation block of an information matrix: near 0 when a match is degenerate along one
+/// axis (a corridor), 1 when it constrains both directions alike.
+double translationInformationRatio(const Eigen::Matrix3d& information);
 
 enum class EdgeKind : std::uint8_t { kSequential = 0, kLoop = 1, kPrior = 2 };
 
