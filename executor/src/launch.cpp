@@ -437,10 +437,9 @@ struct RunningContainer : Supervised {
   std::string name;
   std::size_t threads = 1;
   std::vector<const LaunchComponent*> components;
-  std::shared_ptr<LoadClient> client;  ///< of the current process's load_node service
+  std::shared_ptr<LoadClient> client;  ///< of the container's load_node service (any of its processes)
   std::size_t loaded = 0;              ///< components loaded into the current process
   std::optional<LoadClient::Pending> call;  ///< the load request in flight
-  SteadyTime service_deadline{};       ///< the current process must offer load_node by then
   bool serving() const { return pid > 0 && loaded == components.size(); }
 };
 
@@ -569,9 +568,10 @@ int run_launch_main(int argc, char** argv) {
     rc.due = SteadyTime::max();
     rc.loaded = 0;
     rc.call.reset();
-    rc.client = node.create_client<composition_interfaces::srv::LoadNode_Request,
-                                   composition_interfaces::srv::LoadNode_Response>("/" + rc.name + "/_container/load_node");
-    rc.service_deadline = rc.started + kServiceWait;
+    if (!rc.client) {  // one per container, kept across respawns (the node keeps its clients for its lifetime)
+      rc.client = node.create_client<composition_interfaces::srv::LoadNode_Request,
+                                     composition_interfaces::srv::LoadNode_Response>("/" + rc.name + "/_container/load_node");
+    }
     rc.pid = spawn_process({self, "container", "--name", rc.name, "--threads", std::to_string(rc.threads),
                             "--load-timeout", std::to_string(spec.load_timeout_s)});
   };
@@ -583,7 +583,7 @@ int run_launch_main(int argc, char** argv) {
       const LaunchComponent& comp = *rc.components[rc.loaded];
       if (!rc.call) {
         if (!rc.client->service_is_ready()) {
-          if (now < rc.service_deadline) return "";
+          if (now < rc.started + kServiceWait) return "";  // the process must offer load_node by then
           return spec.file + ": container " + rc.name + " did not offer its load_node service within " +
                  std::to_string(kServiceWait.count()) + " s";
         }
