@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <random>
+#include <vector>
 
 #include "cairn/people_tracking/detector.hpp"
 #include "cairn/people_tracking/scene.hpp"
@@ -56,10 +57,12 @@ const Crowd& crowd() {
 }
 
 // pairing_with_tracks: detectLegs + PeopleTracker::updateLegs with the scan (the component's and the bench's
-// path: track-aware leg pairing, occlusion-aware coasting); otherwise the detector's pairing + update().
-void runPipeline(benchmark::State& state, Association assoc, bool pairing_with_tracks) {
+// path: track-aware leg pairing, occlusion-aware coasting; with `motion`, the detector's motion evidence from the
+// last second of scans as well); otherwise the detector's pairing + update().
+void runPipeline(benchmark::State& state, Association assoc, bool pairing_with_tracks, bool motion = true) {
   const Crowd& c = crowd();
   const PersonDetector detector(c.model);
+  MotionEvidence history;
   TrackerParams p;
   p.association = assoc;
   PeopleTracker tracker(p);
@@ -69,7 +72,9 @@ void runPipeline(benchmark::State& state, Association assoc, bool pairing_with_t
     const LaserScan& scan = c.scans[k % c.scans.size()];
     if (k % c.scans.size() == 0) tracker.reset();  // the crowd jumps back to its start
     if (pairing_with_tracks) {
-      tracker.updateLegs(t, detector.detectLegs(scan), Pose2{}, detector.params(), &scan);
+      const std::vector<LegDetection> legs = detector.detectLegs(scan, motion ? &history : nullptr, Pose2{});
+      if (motion) history.add(scan, Pose2{});  // clears itself when the crowd's stamps jump back
+      tracker.updateLegs(t, legs, Pose2{}, detector.params(), &scan);
     } else {
       tracker.update(t, detector.detect(scan), Pose2{});
     }
@@ -82,8 +87,11 @@ void runPipeline(benchmark::State& state, Association assoc, bool pairing_with_t
 
 void BM_DetectAndTrack30People_GNN(benchmark::State& state) { runPipeline(state, Association::kGnn, true); }
 void BM_DetectAndTrack30People_JPDA(benchmark::State& state) { runPipeline(state, Association::kJpda, true); }
+void BM_DetectAndTrack30People_GNN_NoMotionEvidence(benchmark::State& state) {
+  runPipeline(state, Association::kGnn, true, false);
+}
 void BM_DetectAndTrack30People_GNN_DetectorPairing(benchmark::State& state) {
-  runPipeline(state, Association::kGnn, false);
+  runPipeline(state, Association::kGnn, false, false);
 }
 
 void BM_Detect30People(benchmark::State& state) {
@@ -93,6 +101,23 @@ void BM_Detect30People(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(detector.detect(c.scans[k++ % c.scans.size()]));
   state.SetItemsProcessed(state.iterations());
 }
+
+// Leg detection alone, with and without the motion evidence (the history of the last second is kept as in the
+// pipeline): what the evidence costs per scan.
+void detectLegs30(benchmark::State& state, bool motion) {
+  const Crowd& c = crowd();
+  const PersonDetector detector(c.model);
+  MotionEvidence history;
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const LaserScan& scan = c.scans[k++ % c.scans.size()];
+    benchmark::DoNotOptimize(detector.detectLegs(scan, motion ? &history : nullptr, Pose2{}));
+    if (motion) history.add(scan, Pose2{});
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+void BM_DetectLegs30People(benchmark::State& state) { detectLegs30(state, false); }
+void BM_DetectLegs30People_MotionEvidence(benchmark::State& state) { detectLegs30(state, true); }
 
 void BM_Segment30People(benchmark::State& state) {
   const Crowd& c = crowd();
@@ -104,7 +129,10 @@ void BM_Segment30People(benchmark::State& state) {
 
 BENCHMARK(BM_Segment30People);
 BENCHMARK(BM_Detect30People);
+BENCHMARK(BM_DetectLegs30People);
+BENCHMARK(BM_DetectLegs30People_MotionEvidence);
 BENCHMARK(BM_DetectAndTrack30People_GNN);
 BENCHMARK(BM_DetectAndTrack30People_JPDA);
+BENCHMARK(BM_DetectAndTrack30People_GNN_NoMotionEvidence);
 BENCHMARK(BM_DetectAndTrack30People_GNN_DetectorPairing);
 BENCHMARK_MAIN();

@@ -121,6 +121,17 @@ class PeopleTracker : public cairn::Node {
                         "classifier score to accept a leg");
     declareRuntimeField("detector.track_leg_confidence", dp, detector_params_, &pt::DetectorParams::track_leg_confidence,
                         "weaker legs that may only update existing tracks");
+    declareRuntimeField("detector.moving_fraction", dp, detector_params_, &pt::DetectorParams::moving_fraction,
+                        "share of a cluster's points an earlier scan saw as free space for it to count as moving");
+    declareRuntimeField("detector.moving_track_leg_confidence", dp, detector_params_, &pt::DetectorParams::moving_track_leg_confidence,
+                        "score a moving cluster needs to update existing tracks");
+    declareRuntimeField("detector.moving_min_leg_confidence", dp, detector_params_, &pt::DetectorParams::moving_min_leg_confidence,
+                        "score a moving cluster needs to form persons and start tracks");
+    // Motion evidence (motion_evidence.hpp): the scans of the last motion.window seconds.
+    pt::MotionEvidenceParams mp;
+    mp.window = declareRanged<double>("motion.window", mp.window, "s of earlier scans consulted for motion evidence (0 = off)");
+    mp.min_age = declareRanged<double>("motion.min_age", mp.min_age, "s, earlier scans younger than this are not consulted");
+    mp.margin = declareRanged<double>("motion.margin", mp.margin, "m, an earlier beam must end this far behind a point to see it free");
     declareRuntimeField("detector.max_range", dp, detector_params_, &pt::DetectorParams::max_range,
                         "m, clusters beyond are ignored");
     declareRuntimeField("detector.max_leg_width", dp, detector_params_, &pt::DetectorParams::max_leg_width,
@@ -227,6 +238,7 @@ class PeopleTracker : public cairn::Node {
       throw std::invalid_argument(std::string("model_file: ") + e.what());
     }
     detector_ = std::make_unique<pt::PersonDetector>(classifier_, dp);
+    motion_ = std::make_unique<pt::MotionEvidence>(mp);
     tracker_ = std::make_unique<pt::PeopleTracker>(tp);
     if (use_odom_) {
       tf_buffer_ = std::make_shared<cairn::TransformBuffer>(30.0);
@@ -614,7 +626,8 @@ class PeopleTracker : public cairn::Node {
 
     std::vector<pt::LegDetection> legs;
     try {
-      legs = detector_->detectLegs(scan);
+      legs = detector_->detectLegs(scan, motion_.get(), sensor);
+      motion_->add(scan, sensor);
     } catch (const pt::InputError& e) {
       warn("scan_invalid", std::string("scan: ") + e.what() + ", scan ignored");
       return;
@@ -751,6 +764,7 @@ class PeopleTracker : public cairn::Node {
   pt::MaskMode mask_kind_ = pt::MaskMode::kReturnsInside;
   std::shared_ptr<const pt::LegClassifier> classifier_;
   std::unique_ptr<pt::PersonDetector> detector_;
+  std::unique_ptr<pt::MotionEvidence> motion_;  // earlier scans in the tracking frame (detector's motion evidence)
   pt::DetectorParams detector_params_;  // staged by the run-time setters (applyPendingParameters)
   pt::GuideParams guide_params_;
   std::map<std::string, std::function<void(const cairn::ParameterValue&)>> runtime_setters_;

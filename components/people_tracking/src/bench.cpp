@@ -231,6 +231,7 @@ BenchResult runBench(const BenchParams& params) {
       params.model.empty() ? defaultModelPath(ClassifierKind::kAdaBoost, "arras14") : params.model;
   auto classifier = std::make_shared<const LegClassifier>(LegClassifier::load(model_path));
   const PersonDetector detector(classifier, params.detector);
+  MotionEvidence motion(params.motion);
 
   // Auto world: walls 1.5 m outside the bounding box of all trajectories, robot at the centre.
   const Eigen::Vector2d lo = traj.min - Eigen::Vector2d(1.5, 1.5), hi = traj.max + Eigen::Vector2d(1.5, 1.5);
@@ -358,7 +359,8 @@ BenchResult runBench(const BenchParams& params) {
     counted_sum += static_cast<double>(gt.size());
 
     const auto c0 = Clock::now();
-    const auto legs = detector.detectLegs(sim.scan);
+    const auto legs = detector.detectLegs(sim.scan, &motion, pose);
+    motion.add(sim.scan, pose);
     const auto dets = pairLegs(legs, params.detector);
     const auto c1 = Clock::now();
     if (params.oracle_detections) {
@@ -452,6 +454,7 @@ std::string benchJson(const BenchParams& p, const BenchResult& r) {
     << ", \"sensor_range_m\": " << p.sensor_range;
   if (!p.laser_fov_set) o << ", \"laser_beams\": " << p.laser_beams;
   o << ", \"trajectory_smoothing_s\": " << p.trajectory_smoothing;
+  o << ", \"motion_window_s\": " << p.motion.window;
   if (p.camera.fov > 0.0)
     o << ", \"camera\": {\"fov_deg\": " << p.camera.fov * 180.0 / M_PI << ", \"range_m\": " << p.camera.range
       << ", \"bearing_sigma_deg\": " << p.camera.bearing_sigma * 180.0 / M_PI << ", \"range_sigma\": "

@@ -17,8 +17,15 @@ std::vector<PersonDetection> PersonDetector::detect(const LaserScan& scan, std::
   return pairLegs(legs, params_);
 }
 
-std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan) const {
+std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, const MotionEvidence* motion,
+                                                    const Pose2& sensor_pose) const {
   std::vector<LegDetection> legs;
+  const double plain = std::min(params_.min_leg_confidence, params_.track_leg_confidence);
+  const bool use_motion = motion != nullptr && motion->size() > 0;
+  const double floor = use_motion ? std::min({plain, params_.moving_track_leg_confidence,
+                                              params_.moving_min_leg_confidence})
+                                  : plain;
+  std::vector<Eigen::Vector2d> in_frame;
   for (const Cluster& c : segmentScan(scan, params_.segmentation)) {
     const Eigen::Vector2d centroid = c.centroid();
     const double range = centroid.norm();
@@ -26,12 +33,28 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan) cons
     const double width = (c.points.front() - c.points.back()).norm();
     if (width > params_.max_leg_width) continue;
     const double conf = classifier_->score(computeFeatures(c));
-    if (conf < std::min(params_.min_leg_confidence, params_.track_leg_confidence)) continue;
+    if (conf < floor) continue;
+    double moving = 0.0;
+    if (conf < plain || (conf < params_.min_leg_confidence && params_.moving_min_leg_confidence < params_.min_leg_confidence)) {
+      // Below a plain threshold: is it a leg that moved (motion_evidence.hpp)?
+      if (use_motion) {
+        in_frame.clear();
+        for (const Eigen::Vector2d& p : c.points) in_frame.push_back(sensor_pose.transform(p));
+        moving = motion->freeFraction(in_frame, scan.stamp, params_.moving_fraction);
+      }
+      const bool is_moving = use_motion && moving >= params_.moving_fraction;
+      if (conf < plain && !(is_moving && conf >= params_.moving_track_leg_confidence)) continue;
+    }
     const Eigen::Vector2d center = range > 1e-6 ? Eigen::Vector2d(centroid * (1.0 + params_.leg_center_offset / range))
                                                  : centroid;
-    legs.push_back({center, conf, width});
+    legs.push_back({center, conf, width, moving});
   }
   return legs;
+}
+
+bool isPersonLeg(const LegDetection& leg, const DetectorParams& params) {
+  if (leg.confidence >= params.min_leg_confidence) return true;
+  return leg.moving >= params.moving_fraction && leg.confidence >= params.moving_min_leg_confidence;
 }
 
 PersonDetection personFromLegs(const LegDetection& a, const LegDetection& b, const DetectorParams& params) {
@@ -61,7 +84,7 @@ PersonDetection personFromLeg(const LegDetection& leg, const DetectorParams& par
 std::vector<PersonDetection> pairLegs(const std::vector<LegDetection>& legs, const DetectorParams& params) {
   std::vector<std::tuple<double, std::size_t, std::size_t>> pairs;
   std::vector<bool> used(legs.size(), false);
-  for (std::size_t i = 0; i < legs.size(); ++i) used[i] = legs[i].confidence < params.min_leg_confidence;
+  for (std::size_t i = 0; i < legs.size(); ++i) used[i] = !isPersonLeg(legs[i], params);
   for (std::size_t i = 0; i < legs.size(); ++i)
     for (std::size_t j = i + 1; j < legs.size(); ++j) {
       if (used[i] || used[j]) continue;

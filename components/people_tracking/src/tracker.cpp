@@ -270,7 +270,7 @@ TrackerStatus PeopleTracker::updateLegs(double stamp, const std::vector<LegDetec
     const Eigen::Vector2d p = sensor_pose.transform(l.position);
     // Legs on the static map are parts of it (wall ends, furniture seen edge-on): neither start nor feed tracks.
     if (onStaticMap(p)) continue;
-    in_frame.push_back({p, l.confidence, l.width});
+    in_frame.push_back({p, l.confidence, l.width, l.moving});
   }
   std::vector<int> det_track;
   std::vector<PersonDetection> dets = pairWithTracks(in_frame, pairing, det_track);

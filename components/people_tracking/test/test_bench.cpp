@@ -106,6 +106,21 @@ TEST(Bench, CameraSourceFusedWithTheLegsMissesFewerPeople) {
   EXPECT_THROW(runBench(p), InputError);
 }
 
+// Motion evidence (motion_evidence.hpp): clusters the classifier scores too low but that stand where the beams
+// passed a moment ago keep their tracks updated, so the same scans leave fewer people missed.
+TEST(Bench, MotionEvidenceMissesFewerPeople) {
+  BenchParams p = excerpt();
+  const BenchResult with = runBench(p);
+  p.motion.window = 0.0;
+  const BenchResult without = runBench(p);
+  EXPECT_EQ(with.cairn.mot.gt, without.cairn.mot.gt);  // same scans, same counted people
+  EXPECT_LT(with.cairn.mot.fn, without.cairn.mot.fn);
+  EXPECT_GT(with.cairn.mot.mota(), without.cairn.mot.mota());
+  EXPECT_NE(benchJson(p, without).find("\"motion_window_s\": 0"), std::string::npos);
+  p.motion.margin = -1.0;
+  EXPECT_THROW(runBench(p), InputError);
+}
+
 // --beams: the 360 deg scan's resolution. Half the beams (0.67 deg) leave fewer people hit by the 3 beams that
 // make them count, and the tracker finds fewer of those it counts.
 TEST(Bench, CoarserLaserCountsFewerPeopleAndTracksWorse) {

@@ -773,6 +773,13 @@ TEST(PeopleTrackerComponent, LaunchSpecValidatesItsParameters) {
                         "tracker.leg_spread_sigma: 0.25, tracker.leg_gate_chi2: 6.0, tracker.reid_window: 0.0, "
                         "tracker.occluded_coast_time: 0.5, tracker.free_space_delete_scans: 3}"),
             "");
+  EXPECT_EQ(launchError("{motion.window: 0.0, motion.min_age: 0.2, motion.margin: 0.1, detector.moving_fraction: 0.7, "
+                        "detector.moving_track_leg_confidence: 0.1, detector.moving_min_leg_confidence: 0.4}"),
+            "");
+  e0 = launchError("{motion.window: -1.0}");
+  EXPECT_NE(e0.find("motion.window"), std::string::npos) << e0;
+  e0 = launchError("{detector.moving_fraction: 1.5}");
+  EXPECT_NE(e0.find("detector.moving_fraction"), std::string::npos) << e0;
   e0 = launchError("{tracker.leg_gate_chi2: 0.0}");
   EXPECT_NE(e0.find("tracker.leg_gate_chi2"), std::string::npos) << e0;
   e0 = launchError("{tracker.leg_spread_sigma: -0.1}");

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "cairn/people_tracking/detector.hpp"
+#include "cairn/people_tracking/motion_evidence.hpp"
 #include "cairn/people_tracking/scene.hpp"
 
 using namespace cairn::people_tracking;
@@ -108,4 +109,185 @@ TEST(PersonDetector, RejectsMalformedScan) {
   LaserScan bad;
   EXPECT_THROW(det.detect(bad), InputError);
   EXPECT_THROW(PersonDetector(nullptr), InputError);
+}
+
+namespace {
+// A 360-degree laser like the bench's (1080 beams), with range noise but no dropouts.
+LaserModel fullCircleLaser() {
+  LaserModel l;
+  l.angle_min = -M_PI;
+  l.beams = 1080;
+  l.angle_increment = 2.0 * M_PI / 1080.0;
+  l.dropout_prob = 0.0;
+  return l;
+}
+
+// Scan k (10 Hz, static sensor at the origin) of a walker crossing the office at 1.2 m/s along +y; `scene` is set
+// to what was scanned.
+SimScan crossingScan(WalkerState& w, int k, Scene& scene, std::mt19937_64& rng) {
+  if (k > 0) {
+    w.position.y() += 0.12;
+    advanceGait(w, 0.12, 0.1);
+  }
+  scene = officeScene({w});
+  return renderScan(scene, Pose2{}, fullCircleLaser(), 0.1 * k, rng);
+}
+
+// Counts, over the valid returns of one scan, how many are seen free by the history, split by what they hit.
+struct FreeCount {
+  int person = 0, person_free = 0, other = 0, other_free = 0;
+};
+FreeCount countFree(const MotionEvidence& motion, const SimScan& sim, const Scene& scene, const Pose2& pose) {
+  FreeCount c;
+  for (std::size_t i = 0; i < sim.scan.ranges.size(); ++i) {
+    if (!sim.scan.valid(i) || sim.hit_object[i] < 0) continue;
+    const bool person = scene.object_person[static_cast<std::size_t>(sim.hit_object[i])] >= 0;
+    const bool free = motion.seenFree(pose.transform(sim.scan.point(i)), sim.scan.stamp);
+    (person ? c.person : c.other) += 1;
+    (person ? c.person_free : c.other_free) += free ? 1 : 0;
+  }
+  return c;
+}
+}  // namespace
+
+TEST(MotionEvidence, WallsAndFurnitureDoNotLookMovingFromAMovingRobot) {
+  // The office's walls (one seen at a grazing angle along y = 4 up to x = 7.5), table and chair legs (3 and 1.5 cm
+  // radius) and a box, scanned from a robot driving and turning; the clusters the detector would score (>= 3
+  // points) are checked against the earlier scans. A grazing wall or the silhouette of a thin leg must not look
+  // like something that moved. (Single returns on a chair leg thinner than the beam spacing can: the beams of
+  // another pose pass on both sides of it. Such returns never form a cluster.)
+  const Scene scene = officeScene({});
+  MotionEvidence motion;
+  std::mt19937_64 rng(3);
+  int clusters = 0, points = 0, points_free = 0;
+  for (int k = 0; k < 20; ++k) {
+    const Pose2 pose{-0.5 + 0.05 * k, 0.02 * k, 0.03 * k};
+    const SimScan sim = renderScan(scene, pose, fullCircleLaser(), 0.1 * k, rng);
+    for (const Cluster& c : segmentScan(sim.scan)) {
+      std::vector<Eigen::Vector2d> in_frame;
+      for (const Eigen::Vector2d& p : c.points) in_frame.push_back(pose.transform(p));
+      const double f = motion.freeFraction(in_frame, sim.scan.stamp);
+      EXPECT_LT(f, DetectorParams{}.moving_fraction) << "scan " << k << " cluster at " << in_frame.front().transpose();
+      ++clusters;
+      points += static_cast<int>(in_frame.size());
+      points_free += static_cast<int>(std::lround(f * static_cast<double>(in_frame.size())));
+    }
+    motion.add(sim.scan, pose);
+  }
+  EXPECT_GT(clusters, 100);
+  EXPECT_GT(points, 5000);
+  EXPECT_LE(points_free, 5);  // of all returns in clusters, over 20 scans
+  EXPECT_GE(motion.size(), 10u);  // the scans within the 1 s window of the newest
+  EXPECT_LE(motion.size(), 11u);
+}
+
+TEST(MotionEvidence, AWalkersLegsStandWhereTheBeamsWentThroughBefore) {
+  // A person crossing the office at 1.2 m/s, 4-5 m from a static sensor: after the first min_age, most returns on
+  // the legs are seen free in an earlier scan; none of the furniture's are.
+  MotionEvidence motion;
+  std::mt19937_64 rng(4);
+  WalkerState w = walker(4.0, -2.0, M_PI / 2, 0.0);
+  int person = 0, person_free = 0;
+  for (int k = 0; k < 20; ++k) {
+    Scene scene;
+    const SimScan sim = crossingScan(w, k, scene, rng);
+    const FreeCount c = countFree(motion, sim, scene, Pose2{});
+    EXPECT_EQ(c.other_free, 0) << "scan " << k;
+    if (k == 0) {
+      EXPECT_EQ(c.person_free, 0);  // no history yet
+    }
+    if (k >= 3) {
+      person += c.person;
+      person_free += c.person_free;
+    }
+    motion.add(sim.scan, Pose2{});
+  }
+  ASSERT_GT(person, 100);
+  EXPECT_GT(person_free, 0.8 * person);
+}
+
+TEST(MotionEvidence, StandingStillLongerThanTheWindowGivesNoEvidence) {
+  // Walks for 0.5 s, then stands: 1.5 s later (window 1 s) no return on the legs is seen free any more.
+  MotionEvidenceParams mp;
+  mp.window = 1.0;
+  MotionEvidence motion(mp);
+  std::mt19937_64 rng(6);
+  WalkerState w = walker(3.0, 0.0, 0.0, 0.0);
+  FreeCount last;
+  for (int k = 0; k < 20; ++k) {
+    if (k > 0 && k <= 5) w.position.x() += 0.12;
+    const Scene scene = officeScene({w});
+    const SimScan sim = renderScan(scene, Pose2{}, fullCircleLaser(), 0.1 * k, rng);
+    last = countFree(motion, sim, scene, Pose2{});
+    if (k == 6) {
+      EXPECT_GT(last.person_free, 0);  // just stopped: the spot was free a moment ago
+    }
+    motion.add(sim.scan, Pose2{});
+  }
+  EXPECT_GT(last.person, 10);
+  EXPECT_EQ(last.person_free, 0);
+}
+
+TEST(MotionEvidence, IgnoresScansYoungerThanMinAgeAndClearsWhenTimeGoesBack) {
+  std::mt19937_64 rng(7);
+  const Scene empty = officeScene({});
+  const Scene with_person = officeScene({walker(3.0, 0.0, 0.0, 0.0)});
+  MotionEvidenceParams mp;
+  mp.min_age = 0.15;
+  MotionEvidence motion(mp);
+  motion.add(renderScan(empty, Pose2{}, fullCircleLaser(), 1.0, rng).scan, Pose2{});
+  // The person appears 0.1 s later: the only earlier scan is too young to count.
+  const SimScan soon = renderScan(with_person, Pose2{}, fullCircleLaser(), 1.1, rng);
+  EXPECT_EQ(countFree(motion, soon, with_person, Pose2{}).person_free, 0);
+  // 0.2 s later it counts.
+  const SimScan later = renderScan(with_person, Pose2{}, fullCircleLaser(), 1.2, rng);
+  const FreeCount c = countFree(motion, later, with_person, Pose2{});
+  EXPECT_GT(c.person, 5);
+  EXPECT_EQ(c.person_free, c.person);
+  // A scan stamped before the history replaces it.
+  motion.add(later.scan, Pose2{});
+  EXPECT_EQ(motion.size(), 2u);
+  motion.add(renderScan(empty, Pose2{}, fullCircleLaser(), 0.5, rng).scan, Pose2{});
+  EXPECT_EQ(motion.size(), 1u);
+  LaserScan bad;
+  EXPECT_THROW(motion.add(bad, Pose2{}), InputError);
+  MotionEvidenceParams negative;
+  negative.margin = -0.1;
+  EXPECT_THROW(MotionEvidence{negative}, InputError);
+}
+
+TEST(PersonDetector, MovingClustersPassWithLowerScoresFurnitureDoesNot) {
+  // With plain thresholds nothing can pass (0.999), a walking person's legs still do through the motion evidence,
+  // and only theirs; without the history nothing passes. moving_min_leg_confidence lets them form persons.
+  DetectorParams p;
+  p.min_leg_confidence = 0.999;
+  p.track_leg_confidence = 0.999;
+  p.single_leg_min_confidence = 0.0;
+  p.moving_track_leg_confidence = 0.0;
+  p.moving_min_leg_confidence = 0.999;
+  DetectorParams births = p;
+  births.moving_min_leg_confidence = 0.0;
+  const PersonDetector det(shippedModel(), p), birth_det(shippedModel(), births);
+  MotionEvidence motion;
+  std::mt19937_64 rng(8);
+  WalkerState w = walker(5.0, -2.0, M_PI / 2, 0.0);
+  int legs_on_person = 0, legs_elsewhere = 0, persons_strict = 0, persons_births = 0;
+  for (int k = 0; k < 15; ++k) {
+    Scene scene;
+    const SimScan sim = crossingScan(w, k, scene, rng);
+    const auto legs = det.detectLegs(sim.scan, &motion, Pose2{});
+    for (const LegDetection& l : legs) {
+      const bool on_person = (l.position - w.position).norm() < 0.5;
+      (on_person ? legs_on_person : legs_elsewhere) += 1;
+      EXPECT_GE(l.moving, p.moving_fraction);
+    }
+    EXPECT_TRUE(det.detectLegs(sim.scan).empty());  // no history: the plain thresholds alone
+    persons_strict += static_cast<int>(pairLegs(legs, p).size());
+    persons_births += static_cast<int>(pairLegs(birth_det.detectLegs(sim.scan, &motion, Pose2{}), births).size());
+    motion.add(sim.scan, Pose2{});
+  }
+  EXPECT_GE(legs_on_person, 15);
+  EXPECT_EQ(legs_elsewhere, 0);
+  EXPECT_EQ(persons_strict, 0);
+  EXPECT_GE(persons_births, 8);
 }

@@ -183,6 +183,7 @@ MaskBenchResult runMaskBench(const MaskBenchParams& p) {
   auto classifier = std::make_shared<const LegClassifier>(
       LegClassifier::load(p.model.empty() ? defaultModelPath(ClassifierKind::kAdaBoost, "arras14") : p.model));
   const PersonDetector detector(classifier);
+  MotionEvidence motion;  // as the component: earlier scans in the odometry frame
   PeopleTracker tracker;
   GuideTracker guider;
   std::size_t tracking_scans = 0, masked_beams = 0, guide_in_field = 0, stalled_scans = 0;
@@ -210,7 +211,9 @@ MaskBenchResult runMaskBench(const MaskBenchParams& p) {
       LaserScan ls = fromSimScan(scan);
       const Pose2 base{o.x, o.y, o.theta};
       const Pose2 sensor = base * Pose2{mount.x, mount.y, mount.theta};
-      tracker.updateLegs(scan.stamp, detector.detectLegs(ls), sensor, detector.params(), &ls);
+      const std::vector<LegDetection> legs = detector.detectLegs(ls, &motion, sensor);
+      motion.add(ls, sensor);
+      tracker.updateLegs(scan.stamp, legs, sensor, detector.params(), &ls);
       const std::vector<Track>& tracks = tracker.tracks();  // coasting ones too, as the component (guide.lost_timeout)
       if (guider.state() == GuideState::kSearch) guider.selectClosestInFront(tracks, sensor, scan.stamp);
       const GuideStatus st = guider.update(tracks, sensor, scan.stamp);

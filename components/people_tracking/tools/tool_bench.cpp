@@ -83,6 +83,12 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--single-leg-stride") p.tracker.single_leg_stride_sigma = param(value(), "tracker.single_leg_stride_sigma");
     else if (a == "--initial-velocity-sigma") p.tracker.initial_velocity_sigma = param(value(), "tracker.initial_velocity_sigma");
     else if (a == "--track-leg-confidence") p.detector.track_leg_confidence = param(value(), "detector.track_leg_confidence");
+    else if (a == "--moving-fraction") p.detector.moving_fraction = param(value(), "detector.moving_fraction");
+    else if (a == "--moving-track-leg-confidence") p.detector.moving_track_leg_confidence = param(value(), "detector.moving_track_leg_confidence");
+    else if (a == "--moving-min-leg-confidence") p.detector.moving_min_leg_confidence = param(value(), "detector.moving_min_leg_confidence");
+    else if (a == "--motion-window") p.motion.window = param(value(), "motion.window");
+    else if (a == "--motion-min-age") p.motion.min_age = param(value(), "motion.min_age");
+    else if (a == "--motion-margin") p.motion.margin = param(value(), "motion.margin");
     else if (a == "--min-leg-confidence") p.detector.min_leg_confidence = param(value(), "detector.min_leg_confidence");
     else if (a == "--pair-distance") p.detector.max_leg_pair_distance = param(value(), "detector.max_leg_pair_distance");
     else if (a == "--min-points") p.detector.segmentation.min_points = static_cast<int>(integerParam(value(), "segmentation.min_points"));

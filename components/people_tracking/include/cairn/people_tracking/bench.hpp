@@ -61,6 +61,7 @@ struct BenchParams {
   double oracle_sigma = 0.05;  // m
   CameraModel camera{};        // fov > 0: its detections are fused with the laser's (PeopleTracker::updateLegs)
   DetectorParams detector{};
+  MotionEvidenceParams motion{};  // scan history for the detector's motion evidence (window 0: none)
   LaserModel laser{};          // runBench sets a 360 deg scan of laser_beams beams unless laser_fov_set
   bool laser_fov_set = false;
   int laser_beams = 1080;      // 0.333 deg (`--beams`; 720 = 0.5 deg, SICK S300 class; 1440 = 0.25 deg)

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "cairn/people_tracking/classifier.hpp"
+#include "cairn/people_tracking/motion_evidence.hpp"
 #include "cairn/people_tracking/segmentation.hpp"
 
 namespace cairn::people_tracking {
@@ -14,6 +15,10 @@ struct LegDetection {
   Eigen::Vector2d position;  // sensor frame, estimated leg centre
   double confidence = 0.0;   // classifier score
   double width = 0.0;        // cluster width (m)
+  // Share of the cluster's points an earlier scan saw as free space (motion_evidence.hpp); 0 when not evaluated
+  // (no history, or a score that passes the plain thresholds anyway); below moving_fraction it is a lower bound
+  // (the count stops once the cluster cannot reach it).
+  double moving = 0.0;
 };
 
 // A person hypothesis in the frame of its source (sensor frame from the detector; odom/map after transform).
@@ -35,6 +40,13 @@ struct DetectorParams {
   // 1-3 (with single_leg_stride_sigma 0.3): IDSW 554 -> 358, FN 26260 -> 15661, FP 1915 -> 2313 (0.2; 0.1: 343 /
   // 14188 / 2584; 0.0: 297 / 12486 / 4445).
   double track_leg_confidence = 0.2;
+  // Moving clusters (detectLegs with motion evidence; LegDetection::moving >= moving_fraction) pass with lower
+  // scores: down to moving_track_leg_confidence for updating tracks, down to moving_min_leg_confidence for
+  // persons and new tracks. Furniture and walls are never moving, so these do not let them in
+  // (docs/benchmarks.md "Motion evidence"). A threshold >= the plain one turns that part off.
+  double moving_fraction = 0.5;
+  double moving_track_leg_confidence = 0.0;
+  double moving_min_leg_confidence = 0.5;
   double max_range = 10.0;             // m, clusters beyond are ignored
   double max_leg_width = 0.45;         // m, wider clusters are not legs (also rejects most walls cheaply)
   double leg_center_offset = 0.04;     // m, leg centre lies behind the visible surface along the beam
@@ -51,7 +63,11 @@ class PersonDetector {
   // Throws InputError on malformed scans. Optional outputs: leg detections.
   std::vector<PersonDetection> detect(const LaserScan& scan, std::vector<LegDetection>* legs = nullptr) const;
   // Leg detections only (sensor frame), for PeopleTracker::updateLegs. Throws InputError on malformed scans.
-  [[nodiscard]] std::vector<LegDetection> detectLegs(const LaserScan& scan) const;
+  // With `motion` (the history of earlier scans) and the sensor pose in its frame at the scan stamp, clusters
+  // scored below the plain thresholds get LegDetection::moving and pass with the moving_* thresholds. The caller
+  // adds the scan to `motion` afterwards.
+  [[nodiscard]] std::vector<LegDetection> detectLegs(const LaserScan& scan, const MotionEvidence* motion = nullptr,
+                                                     const Pose2& sensor_pose = {}) const;
   [[nodiscard]] const DetectorParams& params() const { return params_; }
 
  private:
@@ -62,6 +78,9 @@ class PersonDetector {
 // A person between two legs (covariance widened along the pair axis) and a person at one unpaired leg.
 PersonDetection personFromLegs(const LegDetection& a, const LegDetection& b, const DetectorParams& params);
 PersonDetection personFromLeg(const LegDetection& leg, const DetectorParams& params);
+
+// Whether a leg may form persons and start tracks (min_leg_confidence, or moving_min_leg_confidence when moving).
+bool isPersonLeg(const LegDetection& leg, const DetectorParams& params);
 
 // Greedy closest-first pairing of legs into persons (each leg used once; legs below min_leg_confidence are
 // skipped); exposed for tests and other sources.
