@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "cairn/people_tracking/detector.hpp"
 #include "cairn/people_tracking/motion_evidence.hpp"
 #include "cairn/people_tracking/scene.hpp"
@@ -290,4 +292,40 @@ TEST(PersonDetector, MovingClustersPassWithLowerScoresFurnitureDoesNot) {
   EXPECT_EQ(legs_elsewhere, 0);
   EXPECT_EQ(persons_strict, 0);
   EXPECT_GE(persons_births, 8);
+}
+
+TEST(MotionEvidence, NoReturnIsFreeOnlyWithinRangeAndNanIsNoInformation) {
+  // Four beams at -3, -1, +1, +3 degrees: the point ahead at 3 m lies between beams 1 and 2.
+  LaserScan s;
+  s.angle_min = -3.0 * M_PI / 180.0;
+  s.angle_increment = 2.0 * M_PI / 180.0;
+  s.range_min = 0.1;
+  s.range_max = 5.0;
+  s.stamp = 1.0;
+  const Eigen::Vector2d p(3.0, 0.0);
+  auto freeWith = [&](float r1, float r2, double range_max) {
+    MotionEvidence m;
+    LaserScan past = s;
+    past.range_max = range_max;
+    past.ranges = {1.0f, r1, r2, 1.0f};
+    m.add(past, Pose2{});
+    return m.seenFree(p, 1.5);
+  };
+  EXPECT_TRUE(freeWith(4.0f, 4.0f, 5.0));    // both bracketing beams end behind
+  EXPECT_FALSE(freeWith(4.0f, 3.05f, 5.0));  // one ends within the margin
+  EXPECT_FALSE(freeWith(4.0f, 2.0f, 5.0));   // one ends in front (occluded)
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_TRUE(freeWith(4.0f, inf, 5.0));    // no return within 5 m: nothing was there
+  EXPECT_FALSE(freeWith(4.0f, inf, 3.1));   // no return, but the laser would not have seen 3 m + margin
+  EXPECT_FALSE(freeWith(4.0f, nan, 5.0));   // NaN: no information
+  EXPECT_FALSE(freeWith(4.0f, 0.05f, 5.0)); // below range_min: no information
+  // From a sensor pose moved 1 m back and turned, the same world point is found in the scan's own frame.
+  MotionEvidence m;
+  LaserScan past = s;
+  past.ranges = {1.0f, 4.5f, 4.5f, 1.0f};
+  m.add(past, Pose2{-1.0, 0.0, 0.0});  // the point is 4 m ahead of this pose, the returns 4.5 m
+  EXPECT_TRUE(m.seenFree(p, 1.5));
+  m.add(LaserScan{past}, Pose2{-1.0, 0.0, M_PI / 2});  // stamp not later: history restarts with this scan
+  EXPECT_EQ(m.size(), 1u);
+  EXPECT_FALSE(m.seenFree(p, 1.5));  // facing away: the point is outside this scan's beams
 }
