@@ -159,6 +159,9 @@ class PeopleTracker : public cairn::Node {
     tp.maneuver_process_noise = declareRanged<double>("tracker.maneuver_process_noise", tp.maneuver_process_noise, "m^2/s^3, IMM manoeuvre mode (0 = one walking mode)");
     tp.maneuver_rate = declareRanged<double>("tracker.maneuver_rate", tp.maneuver_rate, "1/s, IMM walking -> manoeuvre switching rate");
     tp.maneuver_end_rate = declareRanged<double>("tracker.maneuver_end_rate", tp.maneuver_end_rate, "1/s, IMM manoeuvre -> walking switching rate");
+    tp.adaptive_nis_threshold = declareRanged<double>("tracker.adaptive_nis_threshold", tp.adaptive_nis_threshold, "smoothed NIS above which a track's process noise is raised (0 = off; one mode only)");
+    tp.adaptive_noise_gain = declareRanged<double>("tracker.adaptive_noise_gain", tp.adaptive_noise_gain, "process noise factor while the smoothed NIS is above the threshold");
+    tp.adaptive_nis_smoothing = declareRanged<double>("tracker.adaptive_nis_smoothing", tp.adaptive_nis_smoothing, "weight of the newest NIS in the smoothed value");
     tp.initial_velocity_sigma = declareRanged<double>("tracker.initial_velocity_sigma", tp.initial_velocity_sigma, "m/s, velocity std of a new track");
     tp.gate_chi2 = declareRanged<double>("tracker.gate_chi2", tp.gate_chi2, "chi-square gate (2 dof)");
     tp.confirm_hits = static_cast<int>(declareRanged<int64_t>("tracker.confirm_hits", tp.confirm_hits, "associated scans until confirmed"));

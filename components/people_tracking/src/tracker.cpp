@@ -145,7 +145,9 @@ void predictTrack(Track& t, double stamp, const TrackerParams& p) {
   if (dt <= 0.0) return;
   t.stamp = stamp;
   if (!immOn(p)) {
-    predictCv(t.mode_state[0], t.mode_covariance[0], dt, p.process_noise);
+    // Adaptive process noise (TrackerParams::adaptive_*): a run of surprising updates raises the noise level.
+    const bool adapt = p.adaptive_nis_threshold > 0.0 && t.nis > p.adaptive_nis_threshold;
+    predictCv(t.mode_state[0], t.mode_covariance[0], dt, adapt ? p.process_noise * p.adaptive_noise_gain : p.process_noise);
     combineModes(t, 1);
     return;
   }
@@ -550,6 +552,12 @@ bool PeopleTracker::onStaticMap(const Eigen::Vector2d& p) const {
 
 void PeopleTracker::applyUpdate(Track& t, const PersonDetection& d) {
   if (!immOn(params_)) {
+    if (params_.adaptive_nis_threshold > 0.0) {
+      const Eigen::Vector2d nu = d.position - t.mode_state[0].head<2>();
+      const Eigen::Matrix2d S = t.mode_covariance[0].topLeftCorner<2, 2>() + d.covariance;
+      const double w = params_.adaptive_nis_smoothing;
+      t.nis = (1.0 - w) * t.nis + w * nu.dot(S.ldlt().solve(nu));
+    }
     updateMode(t.mode_state[0], t.mode_covariance[0], d);
     combineModes(t, 1);
   } else {

@@ -513,6 +513,7 @@ TEST(Tracker, ImmKeepsATrackThroughASharpTurn) {
   auto run = [](double maneuver_q, std::vector<double>* p_maneuver) {
     TrackerParams params;
     params.maneuver_process_noise = maneuver_q;
+    params.adaptive_nis_threshold = 0.0;  // the single walking model as it is
     PeopleTracker tracker(params);
     std::mt19937_64 rng(4);
     std::normal_distribution<double> n(0.0, 0.03);
@@ -539,6 +540,48 @@ TEST(Tracker, ImmKeepsATrackThroughASharpTurn) {
   EXPECT_LT(median(10, 30), 0.1);                                       // steady walk before the turn
   EXPECT_GT(*std::max_element(pm.begin() + 31, pm.begin() + 36), 0.5);  // the turn
   EXPECT_LT(median(45, 61), 0.1);                                       // steady again
+}
+
+// Adaptive process noise: a person (or a replayed annotation, docs/benchmarks.md "Annotation jitter") dawdling at
+// 0.3 m/s who suddenly walks off at 2.1 m/s leaves a filter tuned for steady walking behind; a run of large
+// innovations raises the track's process noise, so it catches up sooner (and with legs, whose gates are wider than
+// a person's, keeps its id more often: the 54-run bench figures in tracker.hpp).
+TEST(Tracker, AdaptiveProcessNoiseCatchesUpAfterASpeedJump) {
+  struct Run {
+    std::size_t ids = 0;
+    double lag = 0.0;  // mean distance of the track from the person over the 1.5 s after the jump
+    std::vector<double> nis;
+  };
+  auto run = [](double threshold) {
+    TrackerParams params;
+    params.adaptive_nis_threshold = threshold;
+    PeopleTracker tracker(params);
+    std::mt19937_64 rng(5);
+    std::normal_distribution<double> n(0.0, 0.04);
+    Eigen::Vector2d p(0.0, 0.0);
+    std::set<int> ids;
+    Run r;
+    for (int k = 0; k <= 60; ++k) {
+      p += k <= 30 ? Eigen::Vector2d(0.03, 0.0) : Eigen::Vector2d(0.21, 0.0);
+      tracker.updateInFrame(0.1 * k, {det(p + Eigen::Vector2d(n(rng), n(rng)), 0.04)});
+      for (const Track& tr : tracker.outputTracks()) ids.insert(tr.id);
+      if (tracker.tracks().empty()) continue;
+      r.nis.push_back(tracker.tracks()[0].nis);
+      if (k > 30 && k <= 45) r.lag += (tracker.tracks()[0].position() - p).norm() / 15.0;
+    }
+    r.ids = ids.size();
+    return r;
+  };
+  const double threshold = TrackerParams{}.adaptive_nis_threshold;
+  const Run fixed = run(0.0), adaptive = run(threshold);
+  EXPECT_EQ(fixed.ids, 1u);
+  EXPECT_EQ(adaptive.ids, 1u);
+  EXPECT_LT(adaptive.lag, 0.8 * fixed.lag);
+  ASSERT_EQ(adaptive.nis.size(), 61u);
+  EXPECT_LT(*std::max_element(adaptive.nis.begin() + 10, adaptive.nis.begin() + 31), threshold);  // steady
+  EXPECT_GT(*std::max_element(adaptive.nis.begin() + 31, adaptive.nis.begin() + 36), threshold);  // the jump
+  EXPECT_LT(adaptive.nis.back(), threshold);                                                      // caught up
+  for (double x : fixed.nis) EXPECT_DOUBLE_EQ(x, 2.0);  // off: never updated
 }
 
 TEST(StaticMap, RasterizesStaticGeometryAndAnswersNearness) {

@@ -102,6 +102,7 @@ void usage() {
       "        [--free-space-delete N] [--visibility-radius M] [--min-init-distance M] [--initial-velocity-sigma V]\n"
       "        [--pair-distance M] [--sigma-pair M] [--sigma-single M] [--min-points N]\n"
       "        [--maneuver-noise Q] [--maneuver-rate R] [--maneuver-end-rate R]   (IMM; 0 = one walking mode)\n"
+      "        [--adaptive-nis T] (0 = off) [--adaptive-gain G] [--adaptive-smoothing W]   (adaptive process noise)\n"
       "        motion evidence: [--motion-window S] (0 = off) [--motion-min-age S] [--motion-margin M] [--moving-fraction F]\n"
       "        [--moving-track-leg-confidence C] [--moving-min-leg-confidence C]\n"
       "        second source: [--camera FOV_DEG] [--camera-range M] [--camera-bearing-sigma DEG] [--camera-range-sigma R]\n"

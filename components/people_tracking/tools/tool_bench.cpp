@@ -55,6 +55,9 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--maneuver-noise") p.tracker.maneuver_process_noise = param(value(), "tracker.maneuver_process_noise");
     else if (a == "--maneuver-rate") p.tracker.maneuver_rate = param(value(), "tracker.maneuver_rate");
     else if (a == "--maneuver-end-rate") p.tracker.maneuver_end_rate = param(value(), "tracker.maneuver_end_rate");
+    else if (a == "--adaptive-nis") p.tracker.adaptive_nis_threshold = param(value(), "tracker.adaptive_nis_threshold");
+    else if (a == "--adaptive-gain") p.tracker.adaptive_noise_gain = param(value(), "tracker.adaptive_noise_gain");
+    else if (a == "--adaptive-smoothing") p.tracker.adaptive_nis_smoothing = param(value(), "tracker.adaptive_nis_smoothing");
     else if (a == "--delete-timeout") p.tracker.delete_timeout = param(value(), "tracker.delete_timeout");
     else if (a == "--max-position-sigma") p.tracker.max_position_sigma = param(value(), "tracker.max_position_sigma");
     else if (a == "--confirm-hits") p.tracker.confirm_hits = static_cast<int>(integerParam(value(), "tracker.confirm_hits"));
