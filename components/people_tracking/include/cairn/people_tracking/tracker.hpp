@@ -93,7 +93,7 @@ struct TrackerParams {
   double maneuver_process_noise = 0.0;  // m^2/s^3
   double maneuver_rate = 0.5;           // 1/s, walking -> maneuver
   double maneuver_end_rate = 2.0;       // 1/s, maneuver -> walking
-  // Adaptive process noise (one mode only; Bar-Shalom, Li & Kirubarajan 2001, §11.2 "adjustable level process
+  // Adaptive process noise (GNN, one mode; Bar-Shalom, Li & Kirubarajan 2001, §11.2 "adjustable level process
   // noise"): each track keeps an exponentially smoothed normalized innovation squared (NIS, expected 2 for a
   // consistent filter with 2-D measurements) of its updates; while it is above adaptive_nis_threshold the track is
   // predicted with adaptive_noise_gain x process_noise. A person who speeds up or turns (or an annotation that jumps:
