@@ -25,6 +25,8 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
   const double floor = use_motion ? std::min({plain, params_.moving_track_leg_confidence,
                                               params_.moving_min_leg_confidence})
                                   : plain;
+  // Moving clusters may also form persons below min_leg_confidence: then clusters scored in between are checked too.
+  const bool moving_births = params_.moving_min_leg_confidence < params_.min_leg_confidence;
   std::vector<Eigen::Vector2d> in_frame;
   for (const Cluster& c : segmentScan(scan, params_.segmentation)) {
     const Eigen::Vector2d centroid = c.centroid();
@@ -35,7 +37,7 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
     const double conf = classifier_->score(computeFeatures(c));
     if (conf < floor) continue;
     double moving = 0.0;
-    if (conf < plain || (conf < params_.min_leg_confidence && params_.moving_min_leg_confidence < params_.min_leg_confidence)) {
+    if (conf < plain || (conf < params_.min_leg_confidence && moving_births)) {
       // Below a plain threshold: is it a leg that moved (motion_evidence.hpp)?
       if (use_motion) {
         in_frame.clear();
