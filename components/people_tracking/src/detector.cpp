@@ -28,6 +28,8 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
   // Moving clusters may also form persons below min_leg_confidence: then clusters scored in between are checked too.
   const bool moving_births = params_.moving_min_leg_confidence < params_.min_leg_confidence;
   std::vector<Eigen::Vector2d> in_frame;
+  const Eigen::Matrix2d R = sensor_pose.rotation();  // sensor -> tracking frame, once per scan
+  const Eigen::Vector2d t(sensor_pose.x, sensor_pose.y);
   for (const Cluster& c : segmentScan(scan, params_.segmentation)) {
     const Eigen::Vector2d centroid = c.centroid();
     const double range = centroid.norm();
@@ -41,7 +43,7 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
       // Below a plain threshold: is it a leg that moved (motion_evidence.hpp)?
       if (use_motion) {
         in_frame.clear();
-        for (const Eigen::Vector2d& p : c.points) in_frame.push_back(sensor_pose.transform(p));
+        for (const Eigen::Vector2d& p : c.points) in_frame.push_back(R * p + t);
         moving = motion->freeFraction(in_frame, scan.stamp, params_.moving_fraction);
       }
       const bool is_moving = use_motion && moving >= params_.moving_fraction;

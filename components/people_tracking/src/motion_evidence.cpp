@@ -44,9 +44,9 @@ bool MotionEvidence::freeIn(const Past& past, const Eigen::Vector2d& p) const {
     hi = 0;
   }
   // Both bracketing beams end behind the point (or have no return within a range_max beyond it).
+  const double behind = r + params_.margin;
   for (const long k : {lo, hi}) {
     const auto b = static_cast<std::size_t>(k);
-    const double behind = r + params_.margin;
     if (s.valid(b)) {
       if (s.ranges[b] < behind) return false;
     } else if (!(s.range_max >= behind) || std::isnan(s.ranges[b]) || s.ranges[b] < s.range_min) {

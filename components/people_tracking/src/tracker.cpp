@@ -553,10 +553,8 @@ bool PeopleTracker::onStaticMap(const Eigen::Vector2d& p) const {
 void PeopleTracker::applyUpdate(Track& t, const PersonDetection& d) {
   if (!immOn(params_)) {
     if (params_.adaptive_nis_threshold > 0.0) {
-      const Eigen::Vector2d nu = d.position - t.mode_state[0].head<2>();
-      const Eigen::Matrix2d S = t.mode_covariance[0].topLeftCorner<2, 2>() + d.covariance;
       const double w = params_.adaptive_nis_smoothing;
-      t.nis = (1.0 - w) * t.nis + w * nu.dot(S.ldlt().solve(nu));
+      t.nis = (1.0 - w) * t.nis + w * innovation(t, d).d2;  // one mode: state/covariance are mode 0's
     }
     updateMode(t.mode_state[0], t.mode_covariance[0], d);
     combineModes(t, 1);

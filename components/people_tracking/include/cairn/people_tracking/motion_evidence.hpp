@@ -49,9 +49,7 @@ class MotionEvidence {
                                     double stop_below = 0.0) const;
   // Whether one earlier scan saw `p` (tracking frame) as free space.
   [[nodiscard]] bool seenFree(const Eigen::Vector2d& p, double stamp) const;
-  void clear() { history_.clear(); }
   [[nodiscard]] std::size_t size() const { return history_.size(); }
-  [[nodiscard]] const MotionEvidenceParams& params() const { return params_; }
 
  private:
   struct Past {
