@@ -59,12 +59,14 @@ const Crowd& crowd() {
 // pairing_with_tracks: detectLegs + PeopleTracker::updateLegs with the scan (the component's and the bench's
 // path: track-aware leg pairing, occlusion-aware coasting; with `motion`, the detector's motion evidence from the
 // last second of scans as well); otherwise the detector's pairing + update().
-void runPipeline(benchmark::State& state, Association assoc, bool pairing_with_tracks, bool motion = true) {
+void runPipeline(benchmark::State& state, Association assoc, bool pairing_with_tracks, bool motion = true,
+                 bool joint_pairs = true) {
   const Crowd& c = crowd();
   const PersonDetector detector(c.model);
   MotionEvidence history;
   TrackerParams p;
   p.association = assoc;
+  if (!joint_pairs) p.joint_pairs_max_nodes = 0;
   PeopleTracker tracker(p);
   std::size_t k = 0;
   double t = 0.0;
@@ -89,6 +91,10 @@ void BM_DetectAndTrack30People_GNN(benchmark::State& state) { runPipeline(state,
 void BM_DetectAndTrack30People_JPDA(benchmark::State& state) { runPipeline(state, Association::kJpda, true); }
 void BM_DetectAndTrack30People_GNN_NoMotionEvidence(benchmark::State& state) {
   runPipeline(state, Association::kGnn, true, false);
+}
+// The per-leg Hungarian alone, without the joint pair search (TrackerParams::joint_pairs_max_nodes): its cost.
+void BM_DetectAndTrack30People_GNN_PerLegPairing(benchmark::State& state) {
+  runPipeline(state, Association::kGnn, true, true, false);
 }
 void BM_DetectAndTrack30People_GNN_DetectorPairing(benchmark::State& state) {
   runPipeline(state, Association::kGnn, false, false);
@@ -134,5 +140,6 @@ BENCHMARK(BM_DetectLegs30People_MotionEvidence);
 BENCHMARK(BM_DetectAndTrack30People_GNN);
 BENCHMARK(BM_DetectAndTrack30People_JPDA);
 BENCHMARK(BM_DetectAndTrack30People_GNN_NoMotionEvidence);
+BENCHMARK(BM_DetectAndTrack30People_GNN_PerLegPairing);
 BENCHMARK(BM_DetectAndTrack30People_GNN_DetectorPairing);
 BENCHMARK_MAIN();

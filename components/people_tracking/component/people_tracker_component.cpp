@@ -188,6 +188,7 @@ class PeopleTracker : public cairn::Node {
     tp.occluded_delete_timeout = declareRanged<double>("tracker.occluded_delete_timeout", tp.occluded_delete_timeout, "s without update deletes a track occluded since its last update");
     tp.free_space_delete_scans = static_cast<int>(declareRanged<int64_t>("tracker.free_space_delete_scans", tp.free_space_delete_scans, "consecutive scans with beams through a track delete it"));
     tp.split_scans = static_cast<int>(declareRanged<int64_t>("tracker.split_scans", tp.split_scans, "scans with four legs in a track's gate before it splits (0 = never)"));
+    tp.joint_pairs_max_nodes = static_cast<int>(declareRanged<int64_t>("tracker.joint_pairs_max_nodes", tp.joint_pairs_max_nodes, "search nodes per gating cluster for the joint leg pairing (0 = per-leg Hungarian)"));
     tp.single_leg_stride_sigma = declareRanged<double>("tracker.single_leg_stride_sigma", tp.single_leg_stride_sigma, "m, single-leg update std along the walking direction (0 = off)");
     // Static map (static_map.hpp): legs on its occupied cells are dropped (wall ends, furniture seen edge-on).
     static_map_topic_ = declare_parameter<std::string>("static_map.topic", "", D{"OccupancyGrid (latched) whose occupied cells are not people, e.g. the SLAM map; empty = off", {}, {}, true});

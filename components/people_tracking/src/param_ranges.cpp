@@ -63,6 +63,7 @@ constexpr Entry kRanges[] = {
     {"tracker.occluded_delete_timeout", {0.0, 60.0}},
     {"tracker.free_space_delete_scans", {1.0, 1000.0}},
     {"tracker.split_scans", {0.0, 1000.0}},
+    {"tracker.joint_pairs_max_nodes", {0.0, 10000000.0}},
     {"tracker.single_leg_stride_sigma", {0.0, 2.0}},
     {"fusion.max_pair_distance", {0.0, 10.0}},
     {"fusion.gate_chi2", {0.0, 100.0}},

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <utility>
 
@@ -57,6 +58,7 @@ void checkParams(const TrackerParams& p) {
       {"tracker.occluded_delete_timeout", p.occluded_delete_timeout},
       {"tracker.free_space_delete_scans", p.free_space_delete_scans},
       {"tracker.split_scans", p.split_scans},
+      {"tracker.joint_pairs_max_nodes", p.joint_pairs_max_nodes},
       {"tracker.single_leg_stride_sigma", p.single_leg_stride_sigma},
       {"static_map.margin", p.static_map_margin},
       {"fusion.max_pair_distance", p.fusion.max_pair_distance},
@@ -388,7 +390,8 @@ std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<Leg
       for (long k = 0; k < 2; ++k)
         cost(static_cast<long>(2 * r) + k, nc + static_cast<long>(2 * r) + k) = params_.leg_gate_chi2 + log_det0;
     }
-    const std::vector<int> match = solveAssignment(cost, kForbidden);
+    std::vector<int> match = solveAssignment(cost, kForbidden);
+    if (params_.joint_pairs_max_nodes > 0) jointPairs(legs, pairing, cost, rows, cols, match);
     // Legs inside a confirmed track's gate that it did not take (its third leg, or a leg too far from its
     // partner) are not evidence of a new person: starting tracks on them splits one person into two.
     if (confirmed_stage)
@@ -445,6 +448,111 @@ std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<Leg
     det_track.push_back(-1);
   }
   return out;
+}
+
+// Joint leg assignment with the exact pair likelihood (TrackerParams::joint_pairs_max_nodes). The per-leg costs
+// treat a track's two legs as independent given its predicted centre c ~ N(c^, P): each leg ~ N(c^, P + G), G the
+// leg spread about the body (plus the pair noise). But both legs share the one centre, so the midpoint is
+// m ~ N(c^, P + G/2) and the separation s ~ N(0, 2G), independent of P; the per-leg model puts P/2 into the
+// midpoint and 2P into the separation instead. For a well-localised track (P -> 0) both give the same cost (the
+// map (a, b) -> (m, s) has unit Jacobian); for a young or coasting track (large P) the per-leg model accepts one
+// leg of each of two people walking side by side as a "pair" and the track settles between them. A pair cost is
+// not a sum of per-leg costs, so each gating cluster (tracks and legs connected by gates) is solved exactly by
+// branch and bound over the tracks' options (no leg, one leg, a pair within max_leg_pair_distance), cheapest
+// first; a cluster needing more than max_nodes search nodes keeps the Hungarian solution in `match`.
+void PeopleTracker::jointPairs(const std::vector<LegDetection>& legs, const DetectorParams& pairing,
+                               const Eigen::MatrixXd& cost, const std::vector<std::size_t>& rows,
+                               const std::vector<std::size_t>& cols, std::vector<int>& match) const {
+  constexpr double kForbidden = 1e9;
+  const std::size_t nr = rows.size(), nc = cols.size();
+  // Gating clusters: union-find over tracks [0, nr) and legs [nr, nr + nc).
+  std::vector<std::size_t> parent(nr + nc);
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  auto root = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  auto gated = [&](std::size_t r, std::size_t c) { return cost(static_cast<long>(2 * r), static_cast<long>(c)) < kForbidden; };
+  for (std::size_t r = 0; r < nr; ++r)
+    for (std::size_t c = 0; c < nc; ++c)
+      if (gated(r, c)) parent[root(r)] = root(nr + c);
+  std::map<std::size_t, std::pair<std::vector<std::size_t>, std::vector<std::size_t>>> clusters;
+  for (std::size_t r = 0; r < nr; ++r) clusters[root(r)].first.push_back(r);
+  for (std::size_t c = 0; c < nc; ++c) clusters[root(nr + c)].second.push_back(c);
+  const double no_leg = cost(0, static_cast<long>(nc));  // the same for every slot
+  struct Option {
+    double cost;
+    int a, b;  // leg columns, -1 = none
+  };
+  for (const auto& [key, cluster] : clusters) {
+    const auto& [tr, lg] = cluster;
+    if (tr.empty() || lg.empty()) continue;
+    std::vector<std::vector<Option>> options(tr.size());
+    for (std::size_t k = 0; k < tr.size(); ++k) {
+      const std::size_t r = tr[k];
+      const Track& t = tracks_[rows[r]];
+      const Eigen::Matrix2d G = legSpread(t) + pairing.sigma_pair * pairing.sigma_pair * Eigen::Matrix2d::Identity();
+      const Eigen::Matrix2d M = t.positionCovariance() + 0.5 * G, Sep = 2.0 * G;
+      const Eigen::Matrix2d Mi = M.inverse(), Sepi = Sep.inverse();
+      const double log_dets = std::log(M.determinant()) + std::log(Sep.determinant());
+      std::vector<Option>& o = options[k];
+      o.push_back({2.0 * no_leg, -1, -1});
+      for (std::size_t i = 0; i < lg.size(); ++i) {
+        if (!gated(r, lg[i])) continue;
+        const double ci = cost(static_cast<long>(2 * r), static_cast<long>(lg[i]));
+        o.push_back({ci + no_leg, static_cast<int>(lg[i]), -1});
+        const Eigen::Vector2d la = legs[cols[lg[i]]].position;
+        for (std::size_t j = i + 1; j < lg.size(); ++j) {
+          if (!gated(r, lg[j])) continue;
+          const Eigen::Vector2d lb = legs[cols[lg[j]]].position;
+          if ((la - lb).norm() > pairing.max_leg_pair_distance) continue;
+          const Eigen::Vector2d m = 0.5 * (la + lb) - t.position(), s = la - lb;
+          o.push_back({m.dot(Mi * m) + s.dot(Sepi * s) + log_dets, static_cast<int>(lg[i]), static_cast<int>(lg[j])});
+        }
+      }
+      std::sort(o.begin(), o.end(), [](const Option& x, const Option& y) { return x.cost < y.cost; });
+    }
+    // rest[k]: the sum of the cheapest options of tracks k.. (a bound that ignores shared legs).
+    std::vector<double> rest(tr.size() + 1, 0.0);
+    for (std::size_t k = tr.size(); k-- > 0;) rest[k] = rest[k + 1] + options[k].front().cost;
+    std::vector<char> used(nc, 0);
+    std::vector<std::size_t> pick(tr.size(), 0), best_pick;
+    double best = std::numeric_limits<double>::infinity();
+    long nodes = 0;
+    bool aborted = false;
+    std::function<void(std::size_t, double)> search = [&](std::size_t k, double acc) {
+      if (aborted || ++nodes > params_.joint_pairs_max_nodes) {
+        aborted = true;
+        return;
+      }
+      if (k == tr.size()) {
+        if (acc < best) {
+          best = acc;
+          best_pick = pick;
+        }
+        return;
+      }
+      for (std::size_t q = 0; q < options[k].size(); ++q) {
+        const Option& o = options[k][q];
+        if (acc + o.cost + rest[k + 1] >= best) break;  // sorted: every later option costs more
+        if ((o.a >= 0 && used[static_cast<std::size_t>(o.a)]) || (o.b >= 0 && used[static_cast<std::size_t>(o.b)]))
+          continue;
+        for (int leg : {o.a, o.b})
+          if (leg >= 0) used[static_cast<std::size_t>(leg)] = 1;
+        pick[k] = q;
+        search(k + 1, acc + o.cost);
+        for (int leg : {o.a, o.b})
+          if (leg >= 0) used[static_cast<std::size_t>(leg)] = 0;
+      }
+    };
+    search(0, 0.0);
+    if (aborted || best_pick.empty()) continue;
+    for (std::size_t k = 0; k < tr.size(); ++k) {
+      const Option& o = options[k][best_pick[k]];
+      match[2 * tr[k]] = o.a;
+      match[2 * tr[k] + 1] = o.b;
+    }
+  }
 }
 
 // Group-aware split: two people entering side by side often start as one track, and the legs of the second are

@@ -436,6 +436,57 @@ TEST(Tracker, SingleSwingingLegDoesNotDragAWalkingTrack) {
   }
 }
 
+TEST(Tracker, JointPairingKeepsUncertainTracksOffNeighboursLegs) {
+  // Person A walks along +x at 1.3 m/s on y = 0.27 and is tracked; then A is hidden for 0.8 s (no legs: the track
+  // coasts and its position covariance grows) and reappears sidestepped to y = 0 (legs at -0.1 and 0.1) with
+  // person B walking beside at y = 0.55, of whom only the inner leg (0.45) is seen. The coasting track's
+  // prediction lies between them, nearer to A's inner leg and B's leg than to A's outer leg. Scored leg by leg,
+  // the track takes A's inner leg and B's leg as a pair (their separation charged with the track's uncertainty,
+  // twice over) and stays between the two people for good, and B gets no track. With the exact pair likelihood
+  // (joint_pairs_max_nodes > 0) the separation does not depend on the track's uncertainty: it takes A's two legs,
+  // and B's leg starts a track of its own.
+  for (const int nodes : {0, 100000}) {
+    TrackerParams p;
+    p.joint_pairs_max_nodes = nodes;
+    PeopleTracker tracker(p);
+    const DetectorParams dp;
+    const double v = 1.3;
+    int id = -1;
+    double worst = 0.0;  // after A reappears: the track's distance to A
+    for (int k = 0; k <= 35; ++k) {
+      const double t = 0.1 * k;
+      std::vector<LegDetection> legs;
+      if (k < 15) {
+        for (const LegDetection& l : gaitLegs(t, 0.27, v)) legs.push_back(l);
+      } else if (k >= 23) {
+        for (const double y : {-0.1, 0.1, 0.45}) legs.push_back(LegDetection{{v * t, y}, 0.9, 0.12});
+      }
+      tracker.updateLegs(t, legs, Pose2{}, dp);
+      if (k == 14) {
+        ASSERT_EQ(tracker.confirmedTracks().size(), 1u);
+        id = tracker.confirmedTracks()[0].id;
+      }
+      if (k < 23) continue;
+      const Track* track = nullptr;
+      for (const Track& c : tracker.tracks())
+        if (c.id == id) track = &c;
+      ASSERT_NE(track, nullptr) << "nodes " << nodes << ": the track was lost at t = " << t;
+      worst = std::max(worst, (track->position() - Eigen::Vector2d(v * t, 0.0)).norm());
+    }
+    const std::vector<Track> confirmed = tracker.confirmedTracks();
+    const Track* on_b = nearest(confirmed, {3.5 * v, 0.55});
+    if (nodes == 0) {
+      EXPECT_GT(worst, 0.2) << "scenario no longer exercises the leg-by-leg pairing";
+      continue;
+    }
+    EXPECT_LT(worst, 0.05);  // 0.275 leg by leg
+    ASSERT_EQ(confirmed.size(), 2u);
+    ASSERT_NE(on_b, nullptr);
+    EXPECT_NE(on_b->id, id);
+    EXPECT_LT((on_b->position() - Eigen::Vector2d(3.5 * v, 0.45)).norm(), 0.1);  // B's seen leg
+  }
+}
+
 TEST(Tracker, WeakLegsUpdateTracksButStartNone) {
   // Track-supported detection: legs scored between DetectorParams::track_leg_confidence and min_leg_confidence
   // keep an existing track updated (a person at range whose legs the classifier half-recognises), but a new

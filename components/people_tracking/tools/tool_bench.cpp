@@ -83,6 +83,7 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--split-scans") p.tracker.split_scans = static_cast<int>(integerParam(value(), "tracker.split_scans"));
     else if (a == "--visibility-radius") p.tracker.visibility_radius = param(value(), "tracker.visibility_radius");
     else if (a == "--min-init-distance") p.tracker.min_init_distance = param(value(), "tracker.min_init_distance");
+    else if (a == "--joint-pairs") p.tracker.joint_pairs_max_nodes = static_cast<int>(integerParam(value(), "tracker.joint_pairs_max_nodes"));
     else if (a == "--single-leg-stride") p.tracker.single_leg_stride_sigma = param(value(), "tracker.single_leg_stride_sigma");
     else if (a == "--initial-velocity-sigma") p.tracker.initial_velocity_sigma = param(value(), "tracker.initial_velocity_sigma");
     else if (a == "--track-leg-confidence") p.detector.track_leg_confidence = param(value(), "detector.track_leg_confidence");
