@@ -83,8 +83,9 @@ struct TrackerParams {
   // Joint leg pairing (updateLegs, GNN): each gating cluster of tracks and legs is solved with the exact pair
   // likelihood — a track's two legs share its centre, so its position uncertainty widens the legs' midpoint, not
   // their separation (tracker.cpp jointPairs) — by branch and bound with at most this many search nodes per cluster
-  // (larger clusters keep the per-leg Hungarian solution). 0 = per-leg Hungarian only. 54 bench runs: switches
-  // 758 -> 692 (seeds 10-18: 729 -> 651); mean search 2-3 nodes per cluster, largest seen 5905 (18 tracks).
+  // (larger clusters keep the per-leg Hungarian solution). 0 = per-leg Hungarian only; JPDA always pairs per leg.
+  // 54 bench runs: switches 758 -> 692 (seeds 10-18: 729 -> 651); mean search 2-3 nodes per cluster, largest seen
+  // 5905 (18 tracks).
   int joint_pairs_max_nodes = 100000;
   // Gait-aware single-leg update (updateLegs): a track moving faster than leg_spread_min_speed that takes only
   // one leg is updated with the leg's covariance grown by this std along its walking direction: a leg swings
