@@ -373,8 +373,7 @@ std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<Leg
     Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(nr, nc + nr, kForbidden);
     for (std::size_t r = 0; r < rows.size(); ++r) {
       const Track& t = tracks_[rows[r]];
-      const Eigen::Matrix2d S = t.positionCovariance() + legSpread(t) +
-                                pairing.sigma_pair * pairing.sigma_pair * Eigen::Matrix2d::Identity();
+      const Eigen::Matrix2d S = t.positionCovariance() + legCovariance(t, pairing);
       const Eigen::Matrix2d Si = S.inverse();
       // Negative log-likelihood: the log-determinant keeps uncertain (coasting) tracks from taking legs that a
       // well-localised neighbour explains. "No leg" costs the gate plus the log-determinant of a perfectly
@@ -493,7 +492,7 @@ void PeopleTracker::jointPairs(const std::vector<LegDetection>& legs, const Dete
     for (std::size_t k = 0; k < tr.size(); ++k) {
       const std::size_t r = tr[k];
       const Track& t = tracks_[rows[r]];
-      const Eigen::Matrix2d G = legSpread(t) + pairing.sigma_pair * pairing.sigma_pair * Eigen::Matrix2d::Identity();
+      const Eigen::Matrix2d G = legCovariance(t, pairing);
       const Eigen::Matrix2d M = t.positionCovariance() + 0.5 * G, Sep = 2.0 * G;
       const Eigen::Matrix2d Mi = M.inverse(), Sepi = Sep.inverse();
       const double log_dets = std::log(M.determinant()) + std::log(Sep.determinant());
@@ -613,6 +612,10 @@ void PeopleTracker::splitGroups(const std::vector<LegDetection>& legs, const Det
 
 void PeopleTracker::predict(double stamp) {
   for (Track& t : tracks_) predictTrack(t, stamp, params_);
+}
+
+Eigen::Matrix2d PeopleTracker::legCovariance(const Track& t, const DetectorParams& pairing) const {
+  return legSpread(t) + pairing.sigma_pair * pairing.sigma_pair * Eigen::Matrix2d::Identity();
 }
 
 Eigen::Matrix2d PeopleTracker::legSpread(const Track& t) const {

@@ -197,6 +197,8 @@ class PeopleTracker {
   void initiate(const std::vector<PersonDetection>& dets, const std::vector<bool>& det_used);
   void prune();
   Eigen::Matrix2d legSpread(const Track& t) const;
+  // A leg's position about the track's centre: the gait spread plus the detector's pair noise (G in jointPairs).
+  Eigen::Matrix2d legCovariance(const Track& t, const DetectorParams& pairing) const;
   void jointPairs(const std::vector<LegDetection>& legs, const DetectorParams& pairing, const Eigen::MatrixXd& cost,
                   const std::vector<std::size_t>& rows, const std::vector<std::size_t>& cols, std::vector<int>& match) const;
   void reidentify(std::size_t new_track);
