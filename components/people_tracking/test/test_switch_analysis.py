@@ -8,6 +8,9 @@
    Both are "group" (walking together), neither is mutual.
 1b. A scripted crossing: two people pass each other 0.6 m apart in opposite directions and their tracks trade
    people: two "crossing" switches, both mutual.
+1c. A scripted annotation swap: two people walk side by side 0.6 m apart; the recording (annotations every 0.4 s,
+   replayed linearly) exchanges their ids between 0.8 and 1.2 s, the tracks stay on their paths: two switches,
+   both at an annotation swap; the switches of 1 and 1b are not.
 2. --by-range bands on a scripted dump (two people at 1 m and 5 m, legs and one switch known).
 3. The switches a real `cairn people bench --dump` lists in matches.csv are the bench's id_switches, and the
    dump has what --by-range needs.
@@ -63,6 +66,22 @@ def crossing(d):
     write(d + "/tracker_state.csv", "t,id,x,y,vx,vy,confirmed,coast_s,visibility", state)
 
 
+def annotation_swap(d):
+    gt, matches, state = [], [], []
+    lane = lambda pid, t: (0.0 if pid == 1 else 0.6) if t <= 0.8 + 1e-9 else (
+        (0.6 if pid == 1 else 0.0) if t >= 1.2 - 1e-9 else (0.6 * (t - 0.8) / 0.4 if pid == 1 else 0.6 - 0.6 * (t - 0.8) / 0.4))
+    for k in range(21):
+        t = round(0.1 * k, 1)
+        gt += [(t, 1, t, lane(1, t)), (t, 2, t, lane(2, t))]
+        state += [(t, 10, t, 0.0, 1.0, 0.0, 1, 0, 0), (t, 20, t, 0.6, 1.0, 0.0, 1, 0, 0)]
+        after = t >= 1.0 - 1e-9
+        first = abs(t - 1.0) < 1e-9
+        matches += [(t, 1, 20 if after else 10, 10 if first else -1), (t, 2, 10 if after else 20, 20 if first else -1)]
+    write(d + "/groundtruth.csv", "t,id,x,y", gt)
+    write(d + "/matches.csv", "t,person,track,switched_from", matches)
+    write(d + "/tracker_state.csv", "t,id,x,y,vx,vy,confirmed,coast_s,visibility", state)
+
+
 def range_dump(d):
     """Two people at 1 m and 5 m from a sensor at the origin, 4 scans; person 2 switches once (at 0.3 s)."""
     gt, legs, robot, matches = [], [], [], []
@@ -102,11 +121,20 @@ def main():
             check(all(s["early"] and s["young"] and s["group"] for s in sw), f"scripted flags: {sw}")
             check(abs(a["nearest"] - 0.8) < 1e-9, f"scripted nearest: {a['nearest']}")
             check(all(s["situation"] == "group" and not s["mutual"] for s in sw), f"scripted situation: {sw}")
+            check(not any(s["annotation_swap"] for s in sw), f"scripted: no annotation swap expected: {sw}")
     with tempfile.TemporaryDirectory() as d:
         crossing(d)
         sw = switch_analysis.analyse(d)
         check(len(sw) == 2 and all(s["situation"] == "crossing" and s["mutual"] for s in sw),
               f"crossing: expected two mutual crossing switches, got {sw}")
+        check(not any(s["annotation_swap"] for s in sw), f"crossing: no annotation swap expected: {sw}")
+    with tempfile.TemporaryDirectory() as d:
+        annotation_swap(d)
+        sw = switch_analysis.analyse(d)
+        check(len(sw) == 2 and all(s["annotation_swap"] and s["mutual"] for s in sw),
+              f"annotation swap: expected two mutual switches at an annotation swap, got {sw}")
+        events = switch_analysis.annotation_swaps(switch_analysis.by_time(d + "/groundtruth.csv"))
+        check(len(events) == 1 and events[0][1] == {1, 2}, f"annotation swap events: {events}")
     with tempfile.TemporaryDirectory() as d:
         range_dump(d)
         sw = switch_analysis.analyse(d)

@@ -17,6 +17,11 @@ with the switched-from track, so the switches are exactly the bench's id_switche
     walking with it (velocities, over +-0.5 s, differ by less than 0.5 m/s), "crossing" if closer than 1.2 m
     otherwise, "alone" if nobody came that close ("unknown": too few samples for a velocity);
   mutual: another person switched the other way (B -> A) within 1.5 s (two tracks traded people).
+  annotation swap: the person is one of two within 1.5 m of each other whose annotated paths are far smoother with
+    their ids exchanged after some time (second difference over 0.4 s, the annotation period: summed over both,
+    exchanged < 1/4 of as recorded, and as recorded > 0.2 m), within 1.5 s of that time; i.e. the recording labelled
+    two people walking side by side the wrong way round from then on, and the replay has them trade places through
+    each other in one annotation period (ETH/UCY: three such events, docs/benchmarks.md).
 --list prints one line per switch (t, person, A, B, classes, nearest other person in m).
 --by-range (needs robot.csv and legs.csv in the dump) prints, per band of distance from the sensor, the counted
   person-scans, the switches and switches per 10 000 person-scans, and how often a counted person has a leg
@@ -31,6 +36,10 @@ THRESHOLD = 0.5  # m, the bench's match threshold (for "alive_far")
 NEIGHBOUR = 1.2  # m, "group"/"crossing": another person came this close within +-1 s of the switch
 WITH = 0.5  # m/s, "group": velocity difference below this
 MUTUAL = 1.5  # s, window for a mirrored switch
+SWAP_STEP = 0.4  # s, the annotation period of ETH/UCY (annotation swaps)
+SWAP_PAIR = 1.5  # m, the two people are this close at the swap
+SWAP_RATIO = 0.25  # exchanged / recorded second differences (squared, summed over both people)
+SWAP_MIN = 0.2  # m, recorded second difference (root of the sum of squares) at least this
 
 
 def by_time(path):
@@ -81,6 +90,9 @@ def analyse(d):
             on_person[h].add(g)
             last_matched[g] = t
     situations(gt, out)
+    swaps = annotation_swaps(gt)
+    for s in out:
+        s["annotation_swap"] = any(s["person"] in pair and abs(s["t"] - ts) <= MUTUAL for ts, pair in swaps)
     for s in out:
         s["mutual"] = any(o is not s and abs(o["t"] - s["t"]) <= MUTUAL and o["old"] == s["new_id"] and
                           o["new_id"] == s["old"] for o in out)
@@ -122,6 +134,28 @@ def situations(gt, switches):
             s["situation"] = "unknown"
         else:
             s["situation"] = "group" if math.hypot(va[0] - vb[0], va[1] - vb[1]) < WITH else "crossing"
+
+
+def annotation_swaps(gt):
+    """(t, {a, b}) of every likely id exchange in the recording (see the module docstring)."""
+    pos = {(t, int(r["id"])): (float(r["x"]), float(r["y"])) for t, rows in gt.items() for r in rows}
+    key = lambda t: round(t, 3)
+    events = []
+    for t, rows in gt.items():
+        before, after = key(t - SWAP_STEP), key(t + SWAP_STEP)
+        ids = [int(r["id"]) for r in rows if (before, int(r["id"])) in pos and (after, int(r["id"])) in pos]
+        for i, a in enumerate(ids):
+            for b in ids[i + 1:]:
+                pa, pb = pos[(t, a)], pos[(t, b)]
+                if math.hypot(pa[0] - pb[0], pa[1] - pb[1]) > SWAP_PAIR:
+                    continue
+                dd = lambda p0, p1, p2: (p2[0] - 2 * p1[0] + p0[0]) ** 2 + (p2[1] - 2 * p1[1] + p0[1]) ** 2
+                kept = dd(pos[(before, a)], pa, pos[(after, a)]) + dd(pos[(before, b)], pb, pos[(after, b)])
+                exchanged = dd(pos[(before, a)], pa, pos[(after, b)]) + dd(pos[(before, b)], pb, pos[(after, a)])
+                if kept > SWAP_MIN ** 2 and exchanged < SWAP_RATIO * kept:
+                    if not any(pair == {a, b} and abs(ts - t) <= MUTUAL for ts, pair in events):
+                        events.append((t, {a, b}))
+    return events
 
 
 BANDS = (2.0, 4.0, 6.0, 8.0)  # m, upper edges of the distance bands of --by-range (the bench counts up to 8 m)
@@ -174,7 +208,7 @@ def main():
             for s in sw:
                 print(f"{d}: t={s['t']:.2f} person {s['person']}: {s['old']} -> {s['new_id']} "
                       f"{s['old_class']}/{s['new_class']} {s['situation']}{' mutual' if s['mutual'] else ''} "
-                      f"nearest {s['nearest']:.2f} m")
+                      f"nearest {s['nearest']:.2f} m{' annotation-swap' if s['annotation_swap'] else ''}")
     n = len(allsw)
     print(f"switches: {n} in {len(dirs)} runs")
     for key in ("old_class", "new_class"):
@@ -191,6 +225,7 @@ def main():
     c = collections.Counter(s["situation"] for s in allsw)
     print("  situation: " + ", ".join(f"{k} {v}" for k, v in c.most_common()) +
           f"; in mutual swaps (two tracks traded people): {sum(s['mutual'] for s in allsw)}")
+    print(f"  at an annotation swap (the recording exchanged two people's ids): {sum(s['annotation_swap'] for s in allsw)}")
     if "--by-range" in sys.argv:
         print("| distance | person-scans | switches | per 10k | leg >= 0.5 | two legs >= 0.5 | leg >= 0.2 |")
         print("|---|---|---|---|---|---|---|")
