@@ -219,8 +219,10 @@ BenchResult runBench(const BenchParams& params) {
                      "range sigma [0, 1), detection probability [0, 1], false detections [0, 100] per scan)");
   if (params.oracle_detections && !(params.oracle_sigma > 0.0 && params.oracle_sigma < 10.0))
     throw InputError("oracle sigma must be in (0, 10) m");
+  std::vector<IdExchange> exchanges;
   const TrajectorySet traj = [&] {
     TrajectorySet t = loadTrajectories(params.trajectories);
+    if (params.fix_id_exchanges) exchanges = fixIdExchanges(t);
     if (params.trajectory_smoothing > 0.0) smoothTrajectories(t, params.trajectory_smoothing);
     return t;
   }();
@@ -306,6 +308,7 @@ BenchResult runBench(const BenchParams& params) {
   BenchResult result;
   result.format = traj.format;
   result.people_in_file = traj.people.size();
+  result.id_exchanges_fixed = exchanges;
   const double t0 = traj.t_begin + params.start;
   if (params.static_map) {
     Scene fixed = walls;
@@ -454,6 +457,14 @@ std::string benchJson(const BenchParams& p, const BenchResult& r) {
     << ", \"sensor_range_m\": " << p.sensor_range;
   if (!p.laser_fov_set) o << ", \"laser_beams\": " << p.laser_beams;
   o << ", \"trajectory_smoothing_s\": " << p.trajectory_smoothing;
+  if (p.fix_id_exchanges) {
+    o << ", \"id_exchanges_fixed\": [";
+    for (std::size_t i = 0; i < r.id_exchanges_fixed.size(); ++i) {
+      const IdExchange& e = r.id_exchanges_fixed[i];
+      o << (i ? ", " : "") << "{\"a\": " << e.a << ", \"b\": " << e.b << ", \"after_s\": " << e.after << "}";
+    }
+    o << "]";
+  }
   o << ", \"motion_window_s\": " << p.motion.window;
   if (p.camera.fov > 0.0)
     o << ", \"camera\": {\"fov_deg\": " << p.camera.fov * 180.0 / M_PI << ", \"range_m\": " << p.camera.range

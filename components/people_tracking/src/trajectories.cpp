@@ -4,6 +4,8 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <optional>
 #include <sstream>
 
 #include "cairn/people_tracking/scan.hpp"
@@ -49,6 +51,63 @@ void smoothTrajectories(TrajectorySet& set, double sigma) {
     }
     v = std::move(out);
   }
+}
+
+namespace {
+Eigen::Vector2d secondDifference(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  return c - 2.0 * b + a;
+}
+
+// The earliest id exchange in `set` (see fixIdExchanges), if any.
+std::optional<IdExchange> firstIdExchange(const TrajectorySet& set, const IdExchangeParams& p) {
+  // Interior annotations by time (times in microseconds: annotations share a frame clock).
+  std::map<long long, std::vector<std::pair<int, std::size_t>>> at;
+  for (const auto& [id, v] : set.people)
+    for (std::size_t i = 1; i + 1 < v.size(); ++i)
+      if (v[i].t - v[i - 1].t <= set.max_gap && v[i + 1].t - v[i].t <= set.max_gap)
+        at[std::llround(v[i].t * 1e6)].emplace_back(id, i);
+  const double min2 = p.min_second_difference * p.min_second_difference;
+  for (const auto& [key, here] : at)
+    for (std::size_t x = 0; x < here.size(); ++x)
+      for (std::size_t y = x + 1; y < here.size(); ++y) {
+        const auto& va = set.people.at(here[x].first);
+        const auto& vb = set.people.at(here[y].first);
+        const std::size_t i = here[x].second, j = here[y].second;
+        if (std::abs(va[i - 1].t - vb[j - 1].t) > 1e-6 || std::abs(va[i + 1].t - vb[j + 1].t) > 1e-6) continue;
+        if ((va[i].p - vb[j].p).norm() > p.max_distance) continue;
+        const double kept = secondDifference(va[i - 1].p, va[i].p, va[i + 1].p).squaredNorm() +
+                            secondDifference(vb[j - 1].p, vb[j].p, vb[j + 1].p).squaredNorm();
+        const double exchanged = secondDifference(va[i - 1].p, va[i].p, vb[j + 1].p).squaredNorm() +
+                                 secondDifference(vb[j - 1].p, vb[j].p, va[i + 1].p).squaredNorm();
+        if (kept > min2 && exchanged < p.ratio * kept) return IdExchange{here[x].first, here[y].first, va[i].t};
+      }
+  return std::nullopt;
+}
+}  // namespace
+
+std::vector<IdExchange> fixIdExchanges(TrajectorySet& set, const IdExchangeParams& params) {
+  if (!(params.max_distance > 0.0) || !(params.ratio > 0.0 && params.ratio < 1.0) ||
+      !(params.min_second_difference >= 0.0) || !std::isfinite(params.max_distance) ||
+      !std::isfinite(params.min_second_difference))
+    throw InputError("id exchange parameters out of range (max_distance > 0, ratio in (0, 1), min_second_difference >= 0)");
+  std::vector<IdExchange> out;
+  // Each undone exchange leaves both paths smooth at its time, so it is not found again; the bound is a guard.
+  for (std::size_t guard = set.samples(); guard > 0; --guard) {
+    const std::optional<IdExchange> e = firstIdExchange(set, params);
+    if (!e) break;
+    auto& va = set.people.at(e->a);
+    auto& vb = set.people.at(e->b);
+    auto later = [&](std::vector<TrajectoryPoint>& v) {
+      return std::upper_bound(v.begin(), v.end(), e->after, [](double t, const TrajectoryPoint& q) { return t < q.t; });
+    };
+    std::vector<TrajectoryPoint> tail_a(later(va), va.end()), tail_b(later(vb), vb.end());
+    va.erase(later(va), va.end());
+    vb.erase(later(vb), vb.end());
+    va.insert(va.end(), tail_b.begin(), tail_b.end());
+    vb.insert(vb.end(), tail_a.begin(), tail_a.end());
+    out.push_back(*e);
+  }
+  return out;
 }
 
 std::size_t TrajectorySet::samples() const {

@@ -195,6 +195,47 @@ TEST(Trajectories, SmoothingKeepsStraightLinesAndRemovesJitter) {
   EXPECT_THROW(smoothTrajectories(s, std::nan("")), InputError);
 }
 
+// Id exchanges in a recording (fixIdExchanges): two people walk side by side 0.6 m apart at 1.3 m/s; the
+// annotator exchanged their ids after t = 2.0 s, so as recorded each jumps 0.6 m sideways within one 0.4 s period.
+// The exchange is found and undone (both paths straight again); a constant-velocity crossing of two others, a pair
+// walking together and one person turning sharply stay as they are.
+TEST(Trajectories, IdExchangesAreFoundAndUndone) {
+  TrajectorySet s;
+  s.max_gap = 1.0;
+  for (int k = 0; k < 12; ++k) {
+    const double t = 0.4 * k;
+    const bool swapped = t > 2.0 + 1e-9;
+    s.people[1].push_back({t, Eigen::Vector2d(1.3 * t, swapped ? 0.6 : 0.0)});
+    s.people[2].push_back({t, Eigen::Vector2d(1.3 * t, swapped ? 0.0 : 0.6)});
+    s.people[3].push_back({t, Eigen::Vector2d(10.0 + 1.3 * t, 5.0)});         // 3 and 4 cross at right angles,
+    s.people[4].push_back({t, Eigen::Vector2d(10.0 + 2.6, 2.4 + 1.3 * t)});   // both at (12.6, 5) at t = 2.0
+    s.people[5].push_back({t, Eigen::Vector2d(-10.0 + 1.3 * t, -5.0)});       // 5 and 6 walk together
+    s.people[6].push_back({t, Eigen::Vector2d(-10.0 + 1.3 * t, -5.6)});
+    // 7 turns by 90 degrees at t = 2.0 next to nobody
+    s.people[7].push_back({t, t <= 2.0 ? Eigen::Vector2d(20.0 + 1.3 * t, 20.0) : Eigen::Vector2d(22.6, 20.0 + 1.3 * (t - 2.0))});
+  }
+  const TrajectorySet raw = s;
+  const std::vector<IdExchange> fixed = fixIdExchanges(s);
+  ASSERT_EQ(fixed.size(), 1u);
+  EXPECT_EQ(std::min(fixed[0].a, fixed[0].b), 1);
+  EXPECT_EQ(std::max(fixed[0].a, fixed[0].b), 2);
+  EXPECT_DOUBLE_EQ(fixed[0].after, 2.0);
+  for (int k = 0; k < 12; ++k) {
+    EXPECT_NEAR(s.people.at(1)[static_cast<std::size_t>(k)].p.y(), 0.0, 1e-12);
+    EXPECT_NEAR(s.people.at(2)[static_cast<std::size_t>(k)].p.y(), 0.6, 1e-12);
+  }
+  for (int id = 3; id <= 7; ++id) {
+    ASSERT_EQ(s.people.at(id).size(), raw.people.at(id).size());
+    for (std::size_t k = 0; k < s.people.at(id).size(); ++k) EXPECT_EQ(s.people.at(id)[k].p, raw.people.at(id)[k].p);
+  }
+  EXPECT_EQ(s.samples(), raw.samples());
+  EXPECT_EQ(s.min, raw.min);
+  EXPECT_TRUE(fixIdExchanges(s).empty());  // nothing left to undo
+  IdExchangeParams bad;
+  bad.ratio = 1.5;
+  EXPECT_THROW(fixIdExchanges(s, bad), InputError);
+}
+
 // HOTA and OSPA (track_metrics.hpp) on scripted sequences whose values follow from the definitions by hand.
 namespace {
 Hota scoreHota(const std::vector<std::pair<std::vector<MotObject>, std::vector<MotObject>>>& frames) {

@@ -40,6 +40,7 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--start") p.start = number(value());
     else if (a == "--rate") p.scan_rate = number(value());
     else if (a == "--smooth") p.trajectory_smoothing = number(value());
+    else if (a == "--fix-id-swaps") p.fix_id_exchanges = true;
     else if (a == "--camera") p.camera.fov = number(value()) * M_PI / 180.0;
     else if (a == "--camera-range") p.camera.range = number(value());
     else if (a == "--camera-bearing-sigma") p.camera.bearing_sigma = number(value()) * M_PI / 180.0;

@@ -7,10 +7,12 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "cairn/people_tracking/clear_mot.hpp"
 #include "cairn/people_tracking/scene.hpp"
 #include "cairn/people_tracking/tracker.hpp"
+#include "cairn/people_tracking/trajectories.hpp"
 #include "cairn/people_tracking/track_metrics.hpp"
 
 namespace cairn::people_tracking {
@@ -46,6 +48,9 @@ struct BenchParams {
   // Walkers replay the annotations smoothed with smoothTrajectories(sigma = this, s); 0 = linear interpolation
   // of the raw annotations (default). Ground truth is where the walkers are, so it is smoothed too.
   double trajectory_smoothing = 0.0;
+  // Undo the recording's id exchanges (fixIdExchanges; before smoothing) — diagnostic, default off: the walkers
+  // replay the annotations as recorded.
+  bool fix_id_exchanges = false;
   std::string robot_path;      // "" static; "circle:R" circles the centre at 0.4 m/s; or CSV t,x,y,theta
   std::uint64_t seed = 1;
   double scan_rate = 10.0;     // Hz
@@ -91,6 +96,7 @@ struct BenchResult {
   double duration = 0.0;
   std::size_t people_in_file = 0;
   double mean_people_counted = 0.0;
+  std::vector<IdExchange> id_exchanges_fixed;  // with BenchParams::fix_id_exchanges
   BenchRun cairn, baseline;
 };
 

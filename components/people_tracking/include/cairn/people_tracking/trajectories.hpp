@@ -41,4 +41,25 @@ TrajectorySet loadTrajectories(const std::string& path);
 // bounding box) stay as loaded. Throws InputError unless sigma is finite and > 0.
 void smoothTrajectories(TrajectorySet& set, double sigma);
 
+// An exchange of two people's ids in a recording: the annotations of `a` after time `after` are the continuation
+// of `b`'s path and vice versa (the annotator swapped two people walking side by side; replayed as recorded, they
+// trade places through each other within one annotation period).
+struct IdExchange {
+  int a = 0, b = 0;
+  double after = 0.0;  // s, the last annotation time before the exchange
+};
+struct IdExchangeParams {
+  double max_distance = 1.5;           // m, the two people this close at `after`
+  double ratio = 0.25;                 // exchanged / recorded second differences (squared, summed over both)
+  double min_second_difference = 0.2;  // m, the recorded paths' second difference (root of the sum) at least this
+};
+// Finds such exchanges from the annotations alone and undoes them in place, earliest first: at an annotation time
+// t where two people have annotations at t and at the same neighbouring times (no gap > max_gap), their paths'
+// second differences p(t-) - 2 p(t) + p(t+) as recorded and with the two ids exchanged after t are compared; an
+// exchange is undone when it makes both paths much smoother (params). A constant-velocity crossing, a group walking
+// together or one person turning does not qualify (the recorded paths are already smooth, or exchanging does not
+// smooth them). Returns the exchanges undone. The points' set (hence t_begin/t_end/min/max) does not change.
+// Diagnostic (bench --fix-id-swaps); ETH/UCY: three in seq_eth and seq_hotel, docs/benchmarks.md.
+std::vector<IdExchange> fixIdExchanges(TrajectorySet& set, const IdExchangeParams& params = {});
+
 }  // namespace cairn::people_tracking
