@@ -60,9 +60,11 @@ const Crowd& crowd() {
 // path: track-aware leg pairing, occlusion-aware coasting; with `motion`, the detector's motion evidence from the
 // last second of scans as well); otherwise the detector's pairing + update().
 void runPipeline(benchmark::State& state, Association assoc, bool pairing_with_tracks, bool motion = true,
-                 bool joint_pairs = true) {
+                 bool joint_pairs = true, bool small_clusters = true) {
   const Crowd& c = crowd();
-  const PersonDetector detector(c.model);
+  DetectorParams dp;
+  if (!small_clusters) dp.segmentation.min_points = SegmentationParams{}.min_points;
+  const PersonDetector detector(c.model, dp);
   MotionEvidence history;
   TrackerParams p;
   p.association = assoc;
@@ -95,6 +97,10 @@ void BM_DetectAndTrack30People_GNN_NoMotionEvidence(benchmark::State& state) {
 // The per-leg Hungarian alone, without the joint pair search (TrackerParams::joint_pairs_max_nodes): its cost.
 void BM_DetectAndTrack30People_GNN_PerLegPairing(benchmark::State& state) {
   runPipeline(state, Association::kGnn, true, true, false);
+}
+// The detector before it kept clusters of one and two points (detectorSegmentation): their cost.
+void BM_DetectAndTrack30People_GNN_MinPoints3(benchmark::State& state) {
+  runPipeline(state, Association::kGnn, true, true, true, false);
 }
 void BM_DetectAndTrack30People_GNN_DetectorPairing(benchmark::State& state) {
   runPipeline(state, Association::kGnn, false, false);
@@ -141,5 +147,6 @@ BENCHMARK(BM_DetectAndTrack30People_GNN);
 BENCHMARK(BM_DetectAndTrack30People_JPDA);
 BENCHMARK(BM_DetectAndTrack30People_GNN_NoMotionEvidence);
 BENCHMARK(BM_DetectAndTrack30People_GNN_PerLegPairing);
+BENCHMARK(BM_DetectAndTrack30People_GNN_MinPoints3);
 BENCHMARK(BM_DetectAndTrack30People_GNN_DetectorPairing);
 BENCHMARK_MAIN();

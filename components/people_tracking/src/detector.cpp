@@ -34,6 +34,7 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
     const Eigen::Vector2d centroid = c.centroid();
     const double range = centroid.norm();
     if (range > params_.max_range) continue;
+    if (c.points.size() < SegmentationParams{}.min_points && range < params_.small_cluster_min_range) continue;
     const double width = (c.points.front() - c.points.back()).norm();
     if (width > params_.max_leg_width) continue;
     const double conf = classifier_->score(computeFeatures(c));

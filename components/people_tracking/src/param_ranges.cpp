@@ -24,6 +24,7 @@ constexpr Entry kRanges[] = {
     {"detector.moving_track_leg_confidence", {0.0, 1.0}},
     {"detector.moving_min_leg_confidence", {0.0, 1.0}},
     {"detector.max_range", {0.1, 100.0}},
+    {"detector.small_cluster_min_range", {0.0, 100.0}},
     {"detector.max_leg_width", {0.01, 2.0}},
     {"detector.leg_center_offset", {0.0, 0.5}},
     {"detector.max_leg_pair_distance", {0.0, 3.0}},

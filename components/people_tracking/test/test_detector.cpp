@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 
 #include "cairn/people_tracking/detector.hpp"
@@ -328,4 +329,40 @@ TEST(MotionEvidence, NoReturnIsFreeOnlyWithinRangeAndNanIsNoInformation) {
   m.add(LaserScan{past}, Pose2{-1.0, 0.0, M_PI / 2});  // stamp not later: history restarts with this scan
   EXPECT_EQ(m.size(), 1u);
   EXPECT_FALSE(m.seenFree(p, 1.5));  // facing away: the point is outside this scan's beams
+}
+
+// Clusters of one and two points (detectorSegmentation, DetectorParams::small_cluster_min_range): a leg at 6 m
+// seen by one or two beams reaches detectLegs (for the tracks), two points at 2 m do not (a leg there spans about
+// ten beams: a sliver or clutter), and the training segmentation (min_points 3) drops both. Every score is let
+// through (track_leg_confidence 0), so the test is about the cluster rule, not the classifier.
+TEST(PersonDetector, KeepsOneAndTwoPointClustersOnlyBeyondSmallClusterMinRange) {
+  LaserScan s;
+  s.angle_min = -M_PI / 2;
+  s.angle_increment = M_PI / 180.0 / 3.0;  // 0.33 deg
+  s.range_min = 0.1;
+  s.range_max = 20.0;
+  s.stamp = 1.0;
+  s.ranges.assign(541, std::numeric_limits<float>::quiet_NaN());  // -90 .. +90 deg, no returns
+  s.ranges[100] = s.ranges[101] = 6.0f;  // two beams on something 6 m away
+  s.ranges[300] = 6.5f;                  // one beam 6.5 m away
+  s.ranges[400] = s.ranges[401] = 2.0f;  // two beams 2 m away
+  DetectorParams p;
+  p.track_leg_confidence = 0.0;
+  p.min_leg_confidence = 0.0;
+  auto ranges = [&](const DetectorParams& dp) {
+    std::vector<double> r;
+    for (const LegDetection& l : PersonDetector(shippedModel(), dp).detectLegs(s)) r.push_back(l.position.norm());
+    std::sort(r.begin(), r.end());
+    return r;
+  };
+  const std::vector<double> kept = ranges(p);
+  ASSERT_EQ(kept.size(), 2u);
+  EXPECT_NEAR(kept[0], 6.0 + p.leg_center_offset, 0.01);
+  EXPECT_NEAR(kept[1], 6.5 + p.leg_center_offset, 0.01);
+  p.small_cluster_min_range = 0.0;
+  EXPECT_EQ(ranges(p).size(), 3u);  // the one at 2 m as well
+  p.segmentation.min_points = SegmentationParams{}.min_points;
+  EXPECT_TRUE(ranges(p).empty());
+  EXPECT_EQ(DetectorParams{}.segmentation.min_points, 1u);
+  EXPECT_EQ(SegmentationParams{}.min_points, 3u);  // what the classifier is trained on
 }

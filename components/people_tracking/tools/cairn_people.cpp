@@ -112,7 +112,7 @@ void usage() {
       "        OSPA, scans/s (JSON fields: README); tools/score_dump.py rescores a --dump directory independently\n"
       "  mask-bench [--world apartment] [--route home_tour] [--seed N] [--speed 0.5] [--lead 1.2] [--robot follow|route]\n"
       "             [--keep-spurs] [--follow-distance M] [--fov-deg 360] [--range-max 20] [--mask tangents|inside] [--model FILE]\n"
-      "             [--heading-drift R] [--scale-error E] [--max-duration S] [--json]");
+      "             [--min-points N] [--heading-drift R] [--scale-error E] [--max-duration S] [--json]");
 }
 
 // --data: comma-separated list of labelled-cluster CSV files (absent: none; given empty: an error).

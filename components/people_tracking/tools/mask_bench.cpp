@@ -182,7 +182,7 @@ MaskBenchResult runMaskBench(const MaskBenchParams& p) {
   gs::GraphSlam raw(slamOptions(mount)), masked(slamOptions(mount));
   auto classifier = std::make_shared<const LegClassifier>(
       LegClassifier::load(p.model.empty() ? defaultModelPath(ClassifierKind::kAdaBoost, "arras14") : p.model));
-  const PersonDetector detector(classifier);
+  const PersonDetector detector(classifier, p.detector);
   MotionEvidence motion;  // as the component: earlier scans in the odometry frame
   PeopleTracker tracker;
   GuideTracker guider;
@@ -378,6 +378,8 @@ int runMaskBenchVerb(int argc, char** argv) {
     else if (a == "--fov-deg") p.fov_deg = number(value());
     else if (a == "--range-max") p.range_max = number(value());
     else if (a == "--model") p.model = value();
+    else if (a == "--min-points")
+      p.detector.segmentation.min_points = static_cast<std::size_t>(parseInteger(a, value(), 1, 1000));
     else if (a == "--mask") p.mask = parseMaskMode(value(), "--mask");
     else throw InputError("unknown mask-bench option '" + a + "'");
   }

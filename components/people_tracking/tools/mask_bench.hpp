@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include "cairn/people_tracking/detector.hpp"
 #include "cairn/people_tracking/masking.hpp"
 
 namespace cairn::people_tracking {
@@ -27,6 +28,7 @@ struct MaskBenchParams {
   double max_v = 0.7;           // m/s, following speed limit
   double max_w = 1.0;           // rad/s
   std::string model;            // leg classifier ("" = the shipped default AdaBoost model)
+  DetectorParams detector;      // the guide's leg detector (--min-points: its segmentation's smallest cluster)
   double fov_deg = 360.0;       // laser field of view (Yuan's robot: a front laser; 180 deg is the closer setting)
   double range_max = 20.0;      // m, laser range (sim default; SICK LMS 200 ~8 m indoors, Hokuyo URG-04LX 4-5.6 m)
   MaskMode mask = MaskMode::kTangents;  // Yuan's tangent mask, or cairn's returns-inside variant
