@@ -197,6 +197,38 @@ double updateMode(Eigen::Vector4d& x, Eigen::Matrix4d& P, const PersonDetection&
   return -0.5 * nu.dot(Si * nu) - 0.5 * std::log(S.determinant()) - std::log(2.0 * M_PI);
 }
 
+// Gating clusters: tracks [0, nt) and detections [0, nd) connected through gated(i, j) (union-find), those with at
+// least one of each; tracks and detections ascending, clusters ordered by their first track. Association decisions
+// in one cluster cannot affect another (JPDA's joint events, the joint leg pairing's search).
+struct GatingCluster {
+  std::vector<std::size_t> tracks, dets;
+};
+std::vector<GatingCluster> gatingClusters(std::size_t nt, std::size_t nd,
+                                          const std::function<bool(std::size_t, std::size_t)>& gated) {
+  std::vector<std::size_t> parent(nt + nd);
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  auto root = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (std::size_t i = 0; i < nt; ++i)
+    for (std::size_t j = 0; j < nd; ++j)
+      if (gated(i, j)) parent[root(i)] = root(nt + j);
+  std::vector<GatingCluster> out;
+  std::map<std::size_t, std::size_t> index;  // root -> position in out
+  for (std::size_t i = 0; i < nt; ++i) {
+    const auto [it, fresh] = index.emplace(root(i), out.size());
+    if (fresh) out.emplace_back();
+    out[it->second].tracks.push_back(i);
+  }
+  for (std::size_t j = 0; j < nd; ++j) {
+    const auto it = index.find(root(nt + j));
+    if (it != index.end()) out[it->second].dets.push_back(j);
+  }
+  std::erase_if(out, [](const GatingCluster& c) { return c.dets.empty(); });
+  return out;
+}
+
 Innovation innovation(const Track& t, const PersonDetection& d) {
   Innovation in;
   in.nu = d.position - t.state.head<2>();
@@ -465,29 +497,16 @@ void PeopleTracker::jointPairs(const std::vector<LegDetection>& legs, const Dete
                                const Eigen::MatrixXd& cost, const std::vector<std::size_t>& rows,
                                const std::vector<std::size_t>& cols, std::vector<int>& match) const {
   constexpr double kForbidden = 1e9;
-  const std::size_t nr = rows.size(), nc = cols.size();
-  // Gating clusters: union-find over tracks [0, nr) and legs [nr, nr + nc).
-  std::vector<std::size_t> parent(nr + nc);
-  std::iota(parent.begin(), parent.end(), std::size_t{0});
-  auto root = [&](std::size_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
+  const std::size_t nc = cols.size();
   auto gated = [&](std::size_t r, std::size_t c) { return cost(static_cast<long>(2 * r), static_cast<long>(c)) < kForbidden; };
-  for (std::size_t r = 0; r < nr; ++r)
-    for (std::size_t c = 0; c < nc; ++c)
-      if (gated(r, c)) parent[root(r)] = root(nr + c);
-  std::map<std::size_t, std::pair<std::vector<std::size_t>, std::vector<std::size_t>>> clusters;
-  for (std::size_t r = 0; r < nr; ++r) clusters[root(r)].first.push_back(r);
-  for (std::size_t c = 0; c < nc; ++c) clusters[root(nr + c)].second.push_back(c);
   const double no_leg = cost(0, static_cast<long>(nc));  // the same for every slot
   struct Option {
     double cost;
     int a, b;  // leg columns, -1 = none
   };
-  for (const auto& [key, cluster] : clusters) {
-    const auto& [tr, lg] = cluster;
-    if (tr.empty() || lg.empty()) continue;
+  for (const GatingCluster& cluster : gatingClusters(rows.size(), nc, gated)) {
+    const std::vector<std::size_t>& tr = cluster.tracks;  // rows
+    const std::vector<std::size_t>& lg = cluster.dets;    // columns
     std::vector<std::vector<Option>> options(tr.size());
     for (std::size_t k = 0; k < tr.size(); ++k) {
       const std::size_t r = tr[k];
@@ -720,31 +739,17 @@ void PeopleTracker::associateJpda(const std::vector<PersonDetection>& dets, std:
   if (nt == 0 || nd == 0) return;
   std::vector<std::vector<Innovation>> inn(nt, std::vector<Innovation>(nd));
   std::vector<std::vector<std::size_t>> gated(nt);
+  const auto in_gate = [&](std::size_t i, std::size_t j) { return inn[i][j].d2 <= params_.gate_chi2; };
   for (std::size_t i = 0; i < nt; ++i)
     for (std::size_t j = 0; j < nd; ++j) {
       inn[i][j] = innovation(tracks_[i], dets[j]);
-      if (inn[i][j].d2 <= params_.gate_chi2) gated[i].push_back(j);
-    }
-  // Gating clusters: union-find over tracks sharing a detection.
-  std::vector<std::size_t> parent(nt);
-  std::iota(parent.begin(), parent.end(), 0);
-  std::function<std::size_t(std::size_t)> find = [&](std::size_t x) {
-    return parent[x] == x ? x : parent[x] = find(parent[x]);
-  };
-  std::vector<long> owner(nd, -1);
-  for (std::size_t i = 0; i < nt; ++i)
-    for (std::size_t j : gated[i]) {
-      if (owner[j] < 0) owner[j] = static_cast<long>(i);
-      else parent[find(i)] = find(static_cast<std::size_t>(owner[j]));
+      if (in_gate(i, j)) gated[i].push_back(j);
     }
   const double pd = params_.detection_probability;
   const double lambda = std::max(1e-9, params_.clutter_density);
   std::vector<double> det_mass(nd, 0.0);
-  for (std::size_t root = 0; root < nt; ++root) {
-    std::vector<std::size_t> members;
-    for (std::size_t i = 0; i < nt; ++i)
-      if (find(i) == root && !gated[i].empty()) members.push_back(i);
-    if (members.empty()) continue;
+  for (const GatingCluster& cluster : gatingClusters(nt, nd, in_gate)) {
+    const std::vector<std::size_t>& members = cluster.tracks;
     double events = 1.0;
     for (std::size_t i : members) events *= static_cast<double>(gated[i].size() + 1);
     if (events > params_.jpda_max_events) {
