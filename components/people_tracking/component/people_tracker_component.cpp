@@ -121,6 +121,9 @@ class PeopleTracker : public cairn::Node {
                         "classifier score to accept a leg");
     declareRuntimeField("detector.track_leg_confidence", dp, detector_params_, &pt::DetectorParams::track_leg_confidence,
                         "weaker legs that may only update existing tracks");
+    declareRuntimeField("detector.track_leg_confidence_with_map", dp, detector_params_,
+                        &pt::DetectorParams::track_leg_confidence_with_map,
+                        "replaces detector.track_leg_confidence while the static map is attached");
     declareRuntimeField("detector.moving_fraction", dp, detector_params_, &pt::DetectorParams::moving_fraction,
                         "share of a cluster's points an earlier scan saw as free space for it to count as moving");
     declareRuntimeField("detector.moving_track_leg_confidence", dp, detector_params_, &pt::DetectorParams::moving_track_leg_confidence,
@@ -630,9 +633,11 @@ class PeopleTracker : public cairn::Node {
     }
     const std::string frame = use_odom_ ? odom_frame_ : m.header.frame_id;
 
+    // The static map first: with it attached the detector passes weaker legs (track_leg_confidence_with_map).
+    attachStaticMap(frame);
     std::vector<pt::LegDetection> legs;
     try {
-      legs = detector_->detectLegs(scan, motion_.get(), sensor);
+      legs = detector_->detectLegs(scan, motion_.get(), sensor, tracker_->hasStaticMap());
       motion_->add(scan, sensor);
     } catch (const pt::InputError& e) {
       warn("scan_invalid", std::string("scan: ") + e.what() + ", scan ignored");
@@ -640,7 +645,6 @@ class PeopleTracker : public cairn::Node {
     }
     // Published detections: the detector's own pairing (laser frame); tracking pairs the legs with the tracks.
     const std::vector<pt::PersonDetection> dets = pt::pairLegs(legs, detector_->params());
-    attachStaticMap(frame);
     const pt::TrackerStatus st = tracker_->updateLegs(scan.stamp, legs, sensor, detector_->params(), &scan,
                                                       takeOtherDetections(scan.stamp, m.header.frame_id, frame));
     if (st.reset) warn("tracker_reset", "tracker reset: " + st.reason);

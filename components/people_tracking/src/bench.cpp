@@ -362,7 +362,7 @@ BenchResult runBench(const BenchParams& params) {
     counted_sum += static_cast<double>(gt.size());
 
     const auto c0 = Clock::now();
-    const auto legs = detector.detectLegs(sim.scan, &motion, pose);
+    const auto legs = detector.detectLegs(sim.scan, &motion, pose, tracker.hasStaticMap());
     motion.add(sim.scan, pose);
     const auto dets = pairLegs(legs, params.detector);
     const auto c1 = Clock::now();
@@ -466,6 +466,7 @@ std::string benchJson(const BenchParams& p, const BenchResult& r) {
     o << "]";
   }
   o << ", \"motion_window_s\": " << p.motion.window;
+  o << ", \"static_map\": " << (p.static_map ? "true" : "false");
   if (p.camera.fov > 0.0)
     o << ", \"camera\": {\"fov_deg\": " << p.camera.fov * 180.0 / M_PI << ", \"range_m\": " << p.camera.range
       << ", \"bearing_sigma_deg\": " << p.camera.bearing_sigma * 180.0 / M_PI << ", \"range_sigma\": "

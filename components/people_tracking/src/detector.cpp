@@ -18,9 +18,10 @@ std::vector<PersonDetection> PersonDetector::detect(const LaserScan& scan, std::
 }
 
 std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, const MotionEvidence* motion,
-                                                    const Pose2& sensor_pose) const {
+                                                    const Pose2& sensor_pose, bool static_map) const {
   std::vector<LegDetection> legs;
-  const double plain = std::min(params_.min_leg_confidence, params_.track_leg_confidence);
+  const double track = static_map ? params_.track_leg_confidence_with_map : params_.track_leg_confidence;
+  const double plain = std::min(params_.min_leg_confidence, track);
   const bool use_motion = motion != nullptr && motion->size() > 0;
   const double floor = use_motion ? std::min({plain, params_.moving_track_leg_confidence,
                                               params_.moving_min_leg_confidence})

@@ -20,6 +20,7 @@ constexpr Entry kRanges[] = {
     {"segmentation.jump_cap", {0.0, 100.0}},
     {"detector.min_leg_confidence", {0.0, 1.0}},
     {"detector.track_leg_confidence", {0.0, 1.0}},
+    {"detector.track_leg_confidence_with_map", {0.0, 1.0}},
     {"detector.moving_fraction", {0.0, 1.0}},
     {"detector.moving_track_leg_confidence", {0.0, 1.0}},
     {"detector.moving_min_leg_confidence", {0.0, 1.0}},

@@ -161,6 +161,34 @@ TEST(Bench, MotionEvidenceMissesFewerPeople) {
   EXPECT_THROW(runBench(p), InputError);
 }
 
+// With a static map the walls' returns never reach a track, so every cluster next to a track may update it
+// (track_leg_confidence_with_map 0): fewer people missed than with the map-less threshold 0.2; without the map the
+// same threshold 0 lets wall returns keep false tracks alive.
+TEST(Bench, WithTheStaticMapWeakLegsUpdateTracks) {
+  std::size_t fn_mapped = 0, fn_strict = 0, fp_mapped = 0, fp_unmapped = 0;
+  for (const std::uint64_t seed : {1, 2, 3, 4, 5}) {
+    BenchParams p = excerpt();
+    p.seed = seed;
+    p.static_map = true;
+    const BenchResult mapped = runBench(p);
+    if (seed == 1) {
+      EXPECT_NE(benchJson(p, mapped).find("\"static_map\": true"), std::string::npos);
+    }
+    p.detector.track_leg_confidence_with_map = p.detector.track_leg_confidence;
+    const BenchResult strict = runBench(p);
+    EXPECT_EQ(mapped.cairn.mot.gt, strict.cairn.mot.gt);  // same scans, same counted people
+    p.static_map = false;
+    p.detector.track_leg_confidence = 0.0;
+    const BenchResult unmapped = runBench(p);
+    fn_mapped += mapped.cairn.mot.fn;
+    fn_strict += strict.cairn.mot.fn;
+    fp_mapped += mapped.cairn.mot.fp;
+    fp_unmapped += unmapped.cairn.mot.fp;
+  }
+  EXPECT_LT(fn_mapped, fn_strict);
+  EXPECT_GT(fp_unmapped, 2 * fp_mapped);
+}
+
 // --beams: the 360 deg scan's resolution. Half the beams (0.67 deg) leave fewer people hit by the 3 beams that
 // make them count, and the tracker finds fewer of those it counts.
 TEST(Bench, CoarserLaserCountsFewerPeopleAndTracksWorse) {

@@ -107,6 +107,30 @@ TEST(PersonDetector, TrackLegConfidenceAddsWeakLegsButNotPersons) {
   EXPECT_GT(extra, 0u);  // the scene has clusters scored between the two thresholds
 }
 
+// With the tracker's static map attached, track_leg_confidence_with_map (0) replaces track_leg_confidence (0.2):
+// more clusters reach the tracker, persons (pairLegs: min_leg_confidence) are unchanged.
+TEST(PersonDetector, WithAStaticMapWeakerClustersReachTheTracker) {
+  const std::vector<WalkerState> people{walker(2.0, 1.0, 0.3, 0.0), walker(6.0, 1.5, -1.0, 2.0)};
+  const Scene scene = officeScene(people);
+  const PersonDetector det(shippedModel());
+  DetectorParams same;
+  same.track_leg_confidence_with_map = same.track_leg_confidence;
+  const PersonDetector same_det(shippedModel(), same);
+  std::mt19937_64 rng(9);
+  std::size_t below = 0;
+  for (int k = 0; k < 10; ++k) {
+    const SimScan sim = renderScan(scene, Pose2{}, LaserModel{}, 0.1 * k, rng);
+    const auto plain = det.detectLegs(sim.scan), mapped = det.detectLegs(sim.scan, nullptr, {}, true);
+    ASSERT_GE(mapped.size(), plain.size());
+    for (const auto& l : mapped) below += l.confidence < det.params().track_leg_confidence;
+    for (const auto& l : plain) EXPECT_GE(l.confidence, det.params().track_leg_confidence);
+    // Equal thresholds: the map changes nothing.
+    EXPECT_EQ(same_det.detectLegs(sim.scan, nullptr, {}, true).size(), plain.size());
+    EXPECT_EQ(pairLegs(mapped, det.params()).size(), pairLegs(plain, det.params()).size());
+  }
+  EXPECT_GT(below, 0u);  // walls, the table and the chair give clusters scored below 0.2
+}
+
 TEST(PersonDetector, RejectsMalformedScan) {
   const PersonDetector det(shippedModel());
   LaserScan bad;

@@ -88,6 +88,8 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--single-leg-stride") p.tracker.single_leg_stride_sigma = param(value(), "tracker.single_leg_stride_sigma");
     else if (a == "--initial-velocity-sigma") p.tracker.initial_velocity_sigma = param(value(), "tracker.initial_velocity_sigma");
     else if (a == "--track-leg-confidence") p.detector.track_leg_confidence = param(value(), "detector.track_leg_confidence");
+    else if (a == "--track-leg-confidence-with-map")
+      p.detector.track_leg_confidence_with_map = param(value(), "detector.track_leg_confidence_with_map");
     else if (a == "--moving-fraction") p.detector.moving_fraction = param(value(), "detector.moving_fraction");
     else if (a == "--moving-track-leg-confidence") p.detector.moving_track_leg_confidence = param(value(), "detector.moving_track_leg_confidence");
     else if (a == "--moving-min-leg-confidence") p.detector.moving_min_leg_confidence = param(value(), "detector.moving_min_leg_confidence");
@@ -97,6 +99,8 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--min-leg-confidence") p.detector.min_leg_confidence = param(value(), "detector.min_leg_confidence");
     else if (a == "--pair-distance") p.detector.max_leg_pair_distance = param(value(), "detector.max_leg_pair_distance");
     else if (a == "--min-points") p.detector.segmentation.min_points = static_cast<int>(integerParam(value(), "segmentation.min_points"));
+    else if (a == "--small-cluster-min-range")
+      p.detector.small_cluster_min_range = param(value(), "detector.small_cluster_min_range");
     else if (a == "--sigma-pair") p.detector.sigma_pair = param(value(), "detector.sigma_pair");
     else if (a == "--sigma-single") p.detector.sigma_single = param(value(), "detector.sigma_single");
     else if (a == "--trajectory-offset") {  // x,y[,theta]: world = offset (+) data

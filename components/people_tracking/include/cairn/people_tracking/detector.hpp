@@ -52,6 +52,13 @@ struct DetectorParams {
   // 1-3 (with single_leg_stride_sigma 0.3): IDSW 554 -> 358, FN 26260 -> 15661, FP 1915 -> 2313 (0.2; 0.1: 343 /
   // 14188 / 2584; 0.0: 297 / 12486 / 4445).
   double track_leg_confidence = 0.2;
+  // With a static map attached to the tracker (detectLegs' `static_map`), this replaces track_leg_confidence: most
+  // low-scored clusters without a map are wall and furniture returns (wall ends, walls seen at grazing angles), which
+  // keep false tracks alive, and the map drops those before they reach a track (PeopleTracker::updateLegs). ETH/
+  // hotel/zara01 x static/circle x seeds 1-9 with --static-map: 0.2 -> 0.0 takes IDSW 446 -> 372, FP 3929 -> 3991,
+  // FN 44325 -> 40568 (without a map 0.0 gives 372 switches but FP 6512 -> 17461). Our choice (docs/benchmarks.md
+  // "Weak legs with a static map").
+  double track_leg_confidence_with_map = 0.0;
   // Moving clusters (detectLegs with motion evidence; LegDetection::moving >= moving_fraction) pass with lower
   // scores: down to moving_track_leg_confidence for updating tracks, down to moving_min_leg_confidence for
   // persons and new tracks. Furniture and walls are never moving, so these do not let them in
@@ -83,9 +90,10 @@ class PersonDetector {
   // Leg detections only (sensor frame), for PeopleTracker::updateLegs. Throws InputError on malformed scans.
   // With `motion` (the history of earlier scans) and the sensor pose in its frame at the scan stamp, clusters
   // scored below the plain thresholds get LegDetection::moving and pass with the moving_* thresholds. The caller
-  // adds the scan to `motion` afterwards.
+  // adds the scan to `motion` afterwards. `static_map`: the tracker the legs go to has a static map
+  // (PeopleTracker::hasStaticMap), so track_leg_confidence_with_map replaces track_leg_confidence.
   [[nodiscard]] std::vector<LegDetection> detectLegs(const LaserScan& scan, const MotionEvidence* motion = nullptr,
-                                                     const Pose2& sensor_pose = {}) const;
+                                                     const Pose2& sensor_pose = {}, bool static_map = false) const;
   [[nodiscard]] const DetectorParams& params() const { return params_; }
 
  private:

@@ -180,6 +180,7 @@ class PeopleTracker {
   void reset();
   // Static occupancy (static_map.hpp): updateLegs drops legs on it; nullptr removes it. Kept across reset().
   void setStaticMap(std::shared_ptr<const StaticMap> map) { static_map_ = std::move(map); }
+  [[nodiscard]] bool hasStaticMap() const { return static_map_ != nullptr; }
 
  private:
   TrackerStatus checkTime(double stamp);
