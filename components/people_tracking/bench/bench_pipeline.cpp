@@ -60,12 +60,10 @@ const Crowd& crowd() {
 // path: track-aware leg pairing, occlusion-aware coasting; with `motion`, the detector's motion evidence from the
 // last second of scans as well); otherwise the detector's pairing + update().
 void runPipeline(benchmark::State& state, Association assoc, bool pairing_with_tracks, bool motion = true,
-                 bool joint_pairs = true, bool small_clusters = true) {
+                 bool joint_pairs = true, const DetectorParams& dp = {}, const MotionEvidenceParams& mp = {}) {
   const Crowd& c = crowd();
-  DetectorParams dp;
-  if (!small_clusters) dp.segmentation.min_points = SegmentationParams{}.min_points;
   const PersonDetector detector(c.model, dp);
-  MotionEvidence history;
+  MotionEvidence history(mp);
   TrackerParams p;
   p.association = assoc;
   if (!joint_pairs) p.joint_pairs_max_nodes = 0;
@@ -100,7 +98,18 @@ void BM_DetectAndTrack30People_GNN_PerLegPairing(benchmark::State& state) {
 }
 // The detector before it kept clusters of one and two points (detectorSegmentation): their cost.
 void BM_DetectAndTrack30People_GNN_MinPoints3(benchmark::State& state) {
-  runPipeline(state, Association::kGnn, true, true, true, false);
+  DetectorParams dp;
+  dp.segmentation.min_points = SegmentationParams{}.min_points;
+  runPipeline(state, Association::kGnn, true, true, true, dp);
+}
+// The defaults before moving clusters started tracks at any score (DetectorParams::moving_min_leg_confidence 0.5,
+// MotionEvidenceParams::min_free_scans 1): the cost of asking the motion evidence about more clusters.
+void BM_DetectAndTrack30People_GNN_PlainBirths(benchmark::State& state) {
+  DetectorParams dp;
+  dp.moving_min_leg_confidence = dp.min_leg_confidence;
+  MotionEvidenceParams mp;
+  mp.min_free_scans = 1;
+  runPipeline(state, Association::kGnn, true, true, true, dp, mp);
 }
 void BM_DetectAndTrack30People_GNN_DetectorPairing(benchmark::State& state) {
   runPipeline(state, Association::kGnn, false, false);
@@ -148,5 +157,6 @@ BENCHMARK(BM_DetectAndTrack30People_JPDA);
 BENCHMARK(BM_DetectAndTrack30People_GNN_NoMotionEvidence);
 BENCHMARK(BM_DetectAndTrack30People_GNN_PerLegPairing);
 BENCHMARK(BM_DetectAndTrack30People_GNN_MinPoints3);
+BENCHMARK(BM_DetectAndTrack30People_GNN_PlainBirths);
 BENCHMARK(BM_DetectAndTrack30People_GNN_DetectorPairing);
 BENCHMARK_MAIN();

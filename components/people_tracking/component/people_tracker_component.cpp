@@ -135,6 +135,8 @@ class PeopleTracker : public cairn::Node {
     mp.window = declareRanged<double>("motion.window", mp.window, "s of earlier scans consulted for motion evidence (0 = off)");
     mp.min_age = declareRanged<double>("motion.min_age", mp.min_age, "s, earlier scans younger than this are not consulted");
     mp.margin = declareRanged<double>("motion.margin", mp.margin, "m, an earlier beam must end this far behind a point to see it free");
+    mp.min_free_scans = static_cast<std::size_t>(declareRanged<int64_t>("motion.min_free_scans", static_cast<int64_t>(mp.min_free_scans),
+                                                                        "earlier scans that must see a point free"));
     declareRuntimeField("detector.small_cluster_min_range", dp, detector_params_, &pt::DetectorParams::small_cluster_min_range,
                         "m, clusters of 1-2 points closer than this are dropped");
     declareRuntimeField("detector.max_range", dp, detector_params_, &pt::DetectorParams::max_range,

@@ -26,8 +26,10 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
   const double floor = use_motion ? std::min({plain, params_.moving_track_leg_confidence,
                                               params_.moving_min_leg_confidence})
                                   : plain;
-  // Moving clusters may also form persons below min_leg_confidence: then clusters scored in between are checked too.
+  // Moving clusters may also form persons below min_leg_confidence (and single persons below
+  // single_leg_min_confidence): then clusters scored in between are checked too.
   const bool moving_births = params_.moving_min_leg_confidence < params_.min_leg_confidence;
+  const double births_below = std::max(params_.min_leg_confidence, params_.single_leg_min_confidence);
   std::vector<Eigen::Vector2d> in_frame;
   const Eigen::Matrix2d R = sensor_pose.rotation();  // sensor -> tracking frame, once per scan
   const Eigen::Vector2d t(sensor_pose.x, sensor_pose.y);
@@ -41,7 +43,7 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
     const double conf = classifier_->score(computeFeatures(c));
     if (conf < floor) continue;
     double moving = 0.0;
-    if (conf < plain || (conf < params_.min_leg_confidence && moving_births)) {
+    if (conf < plain || (conf < births_below && moving_births)) {
       // Below a plain threshold: is it a leg that moved (motion_evidence.hpp)?
       if (use_motion) {
         in_frame.clear();
@@ -58,9 +60,12 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
   return legs;
 }
 
-bool isPersonLeg(const LegDetection& leg, const DetectorParams& params) {
-  if (leg.confidence >= params.min_leg_confidence) return true;
+bool isMovingPersonLeg(const LegDetection& leg, const DetectorParams& params) {
   return leg.moving >= params.moving_fraction && leg.confidence >= params.moving_min_leg_confidence;
+}
+
+bool isPersonLeg(const LegDetection& leg, const DetectorParams& params) {
+  return leg.confidence >= params.min_leg_confidence || isMovingPersonLeg(leg, params);
 }
 
 PersonDetection personFromLegs(const LegDetection& a, const LegDetection& b, const DetectorParams& params) {
@@ -106,7 +111,8 @@ std::vector<PersonDetection> pairLegs(const std::vector<LegDetection>& legs, con
     out.push_back(personFromLegs(legs[i], legs[j], params));
   }
   for (std::size_t i = 0; i < legs.size(); ++i)
-    if (!used[i] && legs[i].confidence >= params.single_leg_min_confidence) out.push_back(personFromLeg(legs[i], params));
+    if (!used[i] && (legs[i].confidence >= params.single_leg_min_confidence || isMovingPersonLeg(legs[i], params)))
+      out.push_back(personFromLeg(legs[i], params));
   return out;
 }
 

@@ -5,8 +5,9 @@
 namespace cairn::people_tracking {
 
 MotionEvidence::MotionEvidence(MotionEvidenceParams params) : params_(params) {
-  if (!(params_.window >= 0.0) || !(params_.min_age >= 0.0) || !(params_.margin >= 0.0) || params_.max_scans == 0)
-    throw InputError("motion evidence: window, min_age and margin must be >= 0 and max_scans > 0");
+  if (!(params_.window >= 0.0) || !(params_.min_age >= 0.0) || !(params_.margin >= 0.0) || params_.max_scans == 0 ||
+      params_.min_free_scans == 0)
+    throw InputError("motion evidence: window, min_age and margin must be >= 0, max_scans and min_free_scans > 0");
 }
 
 void MotionEvidence::add(const LaserScan& scan, const Pose2& sensor_pose) {
@@ -57,10 +58,11 @@ bool MotionEvidence::freeIn(const Past& past, const Eigen::Vector2d& p) const {
 }
 
 bool MotionEvidence::seenFree(const Eigen::Vector2d& p, double stamp) const {
+  std::size_t free = 0;
   for (const Past& past : history_) {
     const double age = stamp - past.scan.stamp;
     if (age < params_.min_age || age > params_.window) continue;
-    if (freeIn(past, p)) return true;
+    if (freeIn(past, p) && ++free >= params_.min_free_scans) return true;
   }
   return false;
 }

@@ -73,6 +73,7 @@ constexpr Entry kRanges[] = {
     {"motion.window", {0.0, 10.0}},
     {"motion.min_age", {0.0, 10.0}},
     {"motion.margin", {0.0, 2.0}},
+    {"motion.min_free_scans", {1.0, 64.0}},
     {"guide.field_radius", {0.1, 100.0}},
     {"guide.select_max_distance", {0.1, 100.0}},
     {"guide.lost_timeout", {0.0, 60.0}},

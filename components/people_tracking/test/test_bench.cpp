@@ -127,17 +127,25 @@ TEST(Bench, UndoingARecordedIdExchangeRemovesItsSwitches) {
 }
 
 // --camera: a second source (simulated person detector with bearing and range noise) fused with the legs finds
-// people the legs miss: fewer misses and a higher MOTA than the laser alone on the same scans.
+// people the legs miss: fewer misses than the laser alone on the same scans (seeds 1-5 summed; since moving legs
+// start tracks the laser alone misses half as many on this excerpt, and MOTA differs by < 0.001 on average).
 TEST(Bench, CameraSourceFusedWithTheLegsMissesFewerPeople) {
   BenchParams p = excerpt();
-  const BenchResult laser = runBench(p);
-  p.camera.fov = 2 * M_PI;
-  p.tracker.fusion.max_pair_distance = 1.5;
-  p.tracker.fusion.gate_chi2 = 9.21;
-  const BenchResult fused = runBench(p);
-  EXPECT_EQ(fused.cairn.mot.gt, laser.cairn.mot.gt);  // same scans, same counted people
-  EXPECT_LT(fused.cairn.mot.fn, laser.cairn.mot.fn);
-  EXPECT_GT(fused.cairn.mot.mota(), laser.cairn.mot.mota());
+  std::size_t laser_fn = 0, fused_fn = 0;
+  BenchResult fused;
+  for (const std::uint64_t seed : {1, 2, 3, 4, 5}) {
+    p.seed = seed;
+    p.camera.fov = 0.0;
+    const BenchResult laser = runBench(p);
+    p.camera.fov = 2 * M_PI;
+    p.tracker.fusion.max_pair_distance = 1.5;
+    p.tracker.fusion.gate_chi2 = 9.21;
+    fused = runBench(p);
+    EXPECT_EQ(fused.cairn.mot.gt, laser.cairn.mot.gt);  // same scans, same counted people
+    laser_fn += laser.cairn.mot.fn;
+    fused_fn += fused.cairn.mot.fn;
+  }
+  EXPECT_LT(fused_fn, laser_fn);
   EXPECT_NE(benchJson(p, fused).find("\"camera\": {\"fov_deg\": 360"), std::string::npos);
   p.camera.detection_probability = 1.5;
   EXPECT_THROW(runBench(p), InputError);
@@ -159,6 +167,26 @@ TEST(Bench, MotionEvidenceMissesFewerPeople) {
   EXPECT_NE(benchJson(p, without).find("\"motion_window_s\": 0"), std::string::npos);
   p.motion.margin = -1.0;
   EXPECT_THROW(runBench(p), InputError);
+}
+
+// Moving clusters start tracks whatever their score (moving_min_leg_confidence 0; the classifier scores legs of
+// one or two beams low whatever they are): fewer people missed than when they need the plain 0.5.
+TEST(Bench, MovingLegsStartTracksWhateverTheirScore) {
+  std::size_t fn_moving = 0, fn_plain = 0, fp_moving = 0, fp_plain = 0;
+  for (const std::uint64_t seed : {1, 2, 3}) {
+    BenchParams p = excerpt();
+    p.seed = seed;
+    const BenchResult moving = runBench(p);
+    p.detector.moving_min_leg_confidence = p.detector.min_leg_confidence;
+    const BenchResult plain = runBench(p);
+    EXPECT_EQ(moving.cairn.mot.gt, plain.cairn.mot.gt);
+    fn_moving += moving.cairn.mot.fn;
+    fn_plain += plain.cairn.mot.fn;
+    fp_moving += moving.cairn.mot.fp;
+    fp_plain += plain.cairn.mot.fp;
+  }
+  EXPECT_LT(fn_moving, fn_plain);
+  EXPECT_LT(fp_moving, fp_plain + fp_plain / 2 + 5);  // walls and furniture do not move: few new false positives
 }
 
 // With a static map the walls' returns never reach a track, so every cluster next to a track may update it
@@ -190,14 +218,25 @@ TEST(Bench, WithTheStaticMapWeakLegsUpdateTracks) {
 }
 
 // --beams: the 360 deg scan's resolution. Half the beams (0.67 deg) leave fewer people hit by the 3 beams that
-// make them count, and the tracker finds fewer of those it counts.
+// make them count, and the tracker misses a larger share of those it counts (seeds 1-3 summed; MOTA is not
+// compared: the two count different people, and fewer beams also give fewer false positives).
 TEST(Bench, CoarserLaserCountsFewerPeopleAndTracksWorse) {
   BenchParams p = excerpt();
-  const BenchResult fine = runBench(p);
-  p.laser_beams = 540;
-  const BenchResult coarse = runBench(p);
-  EXPECT_LT(coarse.mean_people_counted, fine.mean_people_counted);
-  EXPECT_LT(coarse.cairn.mot.mota(), fine.cairn.mot.mota());
+  std::size_t fine_fn = 0, fine_gt = 0, coarse_fn = 0, coarse_gt = 0;
+  for (const std::uint64_t seed : {1, 2, 3}) {
+    p.seed = seed;
+    p.laser_beams = 1080;
+    const BenchResult fine = runBench(p);
+    p.laser_beams = 540;
+    const BenchResult coarse = runBench(p);
+    EXPECT_LT(coarse.mean_people_counted, fine.mean_people_counted);
+    fine_fn += fine.cairn.mot.fn;
+    fine_gt += fine.cairn.mot.gt;
+    coarse_fn += coarse.cairn.mot.fn;
+    coarse_gt += coarse.cairn.mot.gt;
+  }
+  EXPECT_GT(static_cast<double>(coarse_fn) / static_cast<double>(coarse_gt),
+            static_cast<double>(fine_fn) / static_cast<double>(fine_gt));
   p.laser_beams = 4;
   EXPECT_THROW(runBench(p), InputError);
 }

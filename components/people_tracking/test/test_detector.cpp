@@ -57,6 +57,26 @@ TEST(LegPairing, PairsClosestLegsAndKeepsConfidentSingles) {
   EXPECT_GT(persons[1].covariance(0, 0), persons[0].covariance(0, 0));
 }
 
+// A moving leg (motion evidence) forms a person alone from moving_min_leg_confidence on, whatever
+// single_leg_min_confidence says; a standing one needs single_leg_min_confidence.
+TEST(LegPairing, MovingSingleLegsFormPersonsFromTheMovingThreshold) {
+  DetectorParams p;
+  ASSERT_LT(p.moving_min_leg_confidence, 0.1);
+  const std::vector<LegDetection> legs{{{2.0, 0.0}, 0.1, 0.1, 0.9},   // moving, scored low
+                                       {{5.0, 0.0}, 0.1, 0.1, 0.0},   // standing, scored low
+                                       {{8.0, 0.0}, 0.55, 0.1, 0.0},  // standing, below single_leg_min_confidence
+                                       {{0.0, 4.0}, 0.1, 0.1, 0.3}};  // barely moving (< moving_fraction)
+  const auto persons = pairLegs(legs, p);
+  ASSERT_EQ(persons.size(), 1u);
+  EXPECT_EQ(persons[0].legs, 1);
+  EXPECT_TRUE(persons[0].position.isApprox(Eigen::Vector2d(2.0, 0.0)));
+  p.moving_min_leg_confidence = 0.2;
+  EXPECT_TRUE(pairLegs(legs, p).empty());
+  p.moving_min_leg_confidence = 0.0;
+  p.moving_fraction = 0.25;
+  EXPECT_EQ(pairLegs(legs, p).size(), 2u);  // leg 3 now counts as moving too (4.5 m from leg 0: two singles)
+}
+
 TEST(PersonDetector, FindsPeopleAmongFurniture) {
   const std::vector<WalkerState> people{walker(2.0, 1.0, 0.3, 0.0), walker(4.0, -1.0, 2.0, 1.0),
                                         walker(6.0, 1.5, -1.0, 2.0), walker(1.5, -1.8, 1.0, 1.6)};
@@ -261,6 +281,7 @@ TEST(MotionEvidence, IgnoresScansYoungerThanMinAgeAndClearsWhenTimeGoesBack) {
   const Scene with_person = officeScene({walker(3.0, 0.0, 0.0, 0.0)});
   MotionEvidenceParams mp;
   mp.min_age = 0.15;
+  mp.min_free_scans = 1;  // one earlier scan here
   MotionEvidence motion(mp);
   motion.add(renderScan(empty, Pose2{}, fullCircleLaser(), 1.0, rng).scan, Pose2{});
   // The person appears 0.1 s later: the only earlier scan is too young to count.
@@ -328,8 +349,10 @@ TEST(MotionEvidence, NoReturnIsFreeOnlyWithinRangeAndNanIsNoInformation) {
   s.range_max = 5.0;
   s.stamp = 1.0;
   const Eigen::Vector2d p(3.0, 0.0);
+  MotionEvidenceParams one;
+  one.min_free_scans = 1;  // each case below is one earlier scan
   auto freeWith = [&](float r1, float r2, double range_max) {
-    MotionEvidence m;
+    MotionEvidence m(one);
     LaserScan past = s;
     past.range_max = range_max;
     past.ranges = {1.0f, r1, r2, 1.0f};
@@ -345,7 +368,7 @@ TEST(MotionEvidence, NoReturnIsFreeOnlyWithinRangeAndNanIsNoInformation) {
   EXPECT_FALSE(freeWith(4.0f, nan, 5.0));   // NaN: no information
   EXPECT_FALSE(freeWith(4.0f, 0.05f, 5.0)); // below range_min: no information
   // From a sensor pose moved 1 m back and turned, the same world point is found in the scan's own frame.
-  MotionEvidence m;
+  MotionEvidence m(one);
   LaserScan past = s;
   past.ranges = {1.0f, 4.5f, 4.5f, 1.0f};
   m.add(past, Pose2{-1.0, 0.0, 0.0});  // the point is 4 m ahead of this pose, the returns 4.5 m
@@ -353,6 +376,35 @@ TEST(MotionEvidence, NoReturnIsFreeOnlyWithinRangeAndNanIsNoInformation) {
   m.add(LaserScan{past}, Pose2{-1.0, 0.0, M_PI / 2});  // stamp not later: history restarts with this scan
   EXPECT_EQ(m.size(), 1u);
   EXPECT_FALSE(m.seenFree(p, 1.5));  // facing away: the point is outside this scan's beams
+}
+
+// min_free_scans (default 2): one scan whose beams at the point had no return (a dropout) is not motion; two scans
+// that saw the point free are. The other scans return at the point (3 m), as a static object does.
+TEST(MotionEvidence, OneMissingReturnIsNotMotion) {
+  LaserScan s;
+  s.angle_min = -3.0 * M_PI / 180.0;
+  s.angle_increment = 2.0 * M_PI / 180.0;
+  s.range_min = 0.1;
+  s.range_max = 5.0;
+  const Eigen::Vector2d p(3.0, 0.0);
+  const float inf = std::numeric_limits<float>::infinity();
+  auto scanAt = [&](double stamp, float r1, float r2) {
+    LaserScan past = s;
+    past.stamp = stamp;
+    past.ranges = {1.0f, r1, r2, 1.0f};
+    return past;
+  };
+  MotionEvidence m;
+  ASSERT_EQ(MotionEvidenceParams{}.min_free_scans, 2u);
+  m.add(scanAt(1.0, 3.0f, 3.0f), Pose2{});
+  m.add(scanAt(1.1, inf, inf), Pose2{});  // the object's returns dropped out once
+  m.add(scanAt(1.2, 3.0f, 3.0f), Pose2{});
+  EXPECT_FALSE(m.seenFree(p, 1.5));
+  m.add(scanAt(1.3, 4.5f, 4.5f), Pose2{});  // then the beams pass: the object has gone (free twice)
+  EXPECT_TRUE(m.seenFree(p, 1.5));
+  MotionEvidenceParams zero;
+  zero.min_free_scans = 0;
+  EXPECT_THROW(MotionEvidence{zero}, InputError);
 }
 
 // Clusters of one and two points (detectorSegmentation, DetectorParams::small_cluster_min_range): a leg at 6 m

@@ -96,6 +96,10 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--motion-window") p.motion.window = param(value(), "motion.window");
     else if (a == "--motion-min-age") p.motion.min_age = param(value(), "motion.min_age");
     else if (a == "--motion-margin") p.motion.margin = param(value(), "motion.margin");
+    else if (a == "--motion-min-free-scans")
+      p.motion.min_free_scans = static_cast<std::size_t>(integerParam(value(), "motion.min_free_scans"));
+    else if (a == "--single-leg-min-confidence")
+      p.detector.single_leg_min_confidence = param(value(), "detector.single_leg_min_confidence");
     else if (a == "--min-leg-confidence") p.detector.min_leg_confidence = param(value(), "detector.min_leg_confidence");
     else if (a == "--pair-distance") p.detector.max_leg_pair_distance = param(value(), "detector.max_leg_pair_distance");
     else if (a == "--min-points") p.detector.segmentation.min_points = static_cast<int>(integerParam(value(), "segmentation.min_points"));
