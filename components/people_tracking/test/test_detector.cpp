@@ -340,14 +340,22 @@ TEST(PersonDetector, MovingClustersPassWithLowerScoresFurnitureDoesNot) {
   EXPECT_GE(persons_births, 8);
 }
 
-TEST(MotionEvidence, NoReturnIsFreeOnlyWithinRangeAndNanIsNoInformation) {
-  // Four beams at -3, -1, +1, +3 degrees: the point ahead at 3 m lies between beams 1 and 2.
+// Four beams at -3, -1, +1, +3 degrees, range 0.1-5 m, stamp 1 s: a point ahead at 3 m lies between beams 1 and 2.
+namespace {
+LaserScan fourBeamScan(std::vector<float> ranges = {}) {
   LaserScan s;
   s.angle_min = -3.0 * M_PI / 180.0;
   s.angle_increment = 2.0 * M_PI / 180.0;
   s.range_min = 0.1;
   s.range_max = 5.0;
   s.stamp = 1.0;
+  s.ranges = std::move(ranges);
+  return s;
+}
+}  // namespace
+
+TEST(MotionEvidence, NoReturnIsFreeOnlyWithinRangeAndNanIsNoInformation) {
+  const LaserScan s = fourBeamScan();
   const Eigen::Vector2d p(3.0, 0.0);
   MotionEvidenceParams one;
   one.min_free_scans = 1;  // each case below is one earlier scan
@@ -381,17 +389,11 @@ TEST(MotionEvidence, NoReturnIsFreeOnlyWithinRangeAndNanIsNoInformation) {
 // min_free_scans (default 2): one scan whose beams at the point had no return (a dropout) is not motion; two scans
 // that saw the point free are. The other scans return at the point (3 m), as a static object does.
 TEST(MotionEvidence, OneMissingReturnIsNotMotion) {
-  LaserScan s;
-  s.angle_min = -3.0 * M_PI / 180.0;
-  s.angle_increment = 2.0 * M_PI / 180.0;
-  s.range_min = 0.1;
-  s.range_max = 5.0;
   const Eigen::Vector2d p(3.0, 0.0);
   const float inf = std::numeric_limits<float>::infinity();
-  auto scanAt = [&](double stamp, float r1, float r2) {
-    LaserScan past = s;
+  auto scanAt = [](double stamp, float r1, float r2) {
+    LaserScan past = fourBeamScan({1.0f, r1, r2, 1.0f});
     past.stamp = stamp;
-    past.ranges = {1.0f, r1, r2, 1.0f};
     return past;
   };
   MotionEvidence m;
