@@ -65,8 +65,8 @@ struct DetectorParams {
   // never moving, so these do not let them in (docs/benchmarks.md "Motion evidence"). A threshold >= the plain one
   // turns that part off. moving_min_leg_confidence 0.5 -> 0.0 (with moving single legs and
   // MotionEvidenceParams::min_free_scans 2): 54 bench runs IDSW 447 -> 389 (held-out seeds 441 -> 382), FP +0.2 %,
-  // FN -25 %; with --static-map 372 -> 293 (docs/benchmarks.md "Moving legs start tracks"). The leg classifier scores 1-2-point clusters low whatever they are; their motion says they
-  // are legs. Our choice.
+  // FN -25 %; with --static-map 372 -> 293 (docs/benchmarks.md "Moving legs start tracks"). The leg classifier
+  // scores 1-2-point clusters low whatever they are; their motion says they are legs. Our choice.
   double moving_fraction = 0.5;
   double moving_track_leg_confidence = 0.0;
   double moving_min_leg_confidence = 0.0;
@@ -111,7 +111,8 @@ PersonDetection personFromLeg(const LegDetection& leg, const DetectorParams& par
 
 // Whether a leg may form persons and start tracks (min_leg_confidence, or moving_min_leg_confidence when moving).
 bool isPersonLeg(const LegDetection& leg, const DetectorParams& params);
-// Whether a leg counts as moving for persons and births (moving >= moving_fraction, score >= moving_min_leg_confidence).
+// Whether a leg may form persons and start tracks by its motion (moving >= moving_fraction and score >=
+// moving_min_leg_confidence), also alone (pairLegs: instead of single_leg_min_confidence).
 bool isMovingPersonLeg(const LegDetection& leg, const DetectorParams& params);
 
 // Greedy closest-first pairing of legs into persons (each leg used once; legs below min_leg_confidence are
