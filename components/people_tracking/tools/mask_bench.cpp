@@ -379,7 +379,8 @@ int runMaskBenchVerb(int argc, char** argv) {
     else if (a == "--range-max") p.range_max = number(value());
     else if (a == "--model") p.model = value();
     else if (a == "--min-points")
-      p.detector.segmentation.min_points = static_cast<std::size_t>(parseInteger(a, value(), 1, 1000));
+      p.detector.segmentation.min_points =
+          static_cast<std::size_t>(parseIntegerParam(a, value(), "segmentation.min_points"));
     else if (a == "--mask") p.mask = parseMaskMode(value(), "--mask");
     else throw InputError("unknown mask-bench option '" + a + "'");
   }
