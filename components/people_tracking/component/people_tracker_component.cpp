@@ -143,6 +143,12 @@ class PeopleTracker : public cairn::Node {
                         "m, clusters beyond are ignored");
     declareRuntimeField("detector.max_leg_width", dp, detector_params_, &pt::DetectorParams::max_leg_width,
                         "m, wider clusters are not legs");
+    declareRuntimeField("detector.split_min_width", dp, detector_params_, &pt::DetectorParams::split_min_width,
+                        "m, clusters this wide may be split into two legs at a step (above max_leg_width: off)");
+    declareRuntimeField("detector.split_gap_ratio", dp, detector_params_, &pt::DetectorParams::split_gap_ratio,
+                        "a split step is this many times the cluster's median step between returns");
+    declareRuntimeField("detector.split_min_gap_beams", dp, detector_params_, &pt::DetectorParams::split_min_gap_beams,
+                        "a split step is at least this many beam spacings");
     declareRuntimeField("detector.leg_center_offset", dp, detector_params_, &pt::DetectorParams::leg_center_offset,
                         "m, leg centre behind the visible surface");
     declareRuntimeField("detector.max_leg_pair_distance", dp, detector_params_, &pt::DetectorParams::max_leg_pair_distance,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <tuple>
+#include <utility>
 
 namespace cairn::people_tracking {
 
@@ -53,9 +54,26 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
       const bool is_moving = use_motion && moving >= params_.moving_fraction;
       if (conf < plain && !(is_moving && conf >= params_.moving_track_leg_confidence)) continue;
     }
-    const Eigen::Vector2d center = range > 1e-6 ? Eigen::Vector2d(centroid * (1.0 + params_.leg_center_offset / range))
-                                                 : centroid;
-    legs.push_back({center, conf, width, moving});
+    // The leg's centre lies behind its visible surface along the beam.
+    auto legCenter = [&](const Eigen::Vector2d& surface) -> Eigen::Vector2d {
+      const double r = surface.norm();
+      return r > 1e-6 ? Eigen::Vector2d(surface * (1.0 + params_.leg_center_offset / r)) : surface;
+    };
+    const std::size_t split = width >= params_.split_min_width
+                                  ? gapSplitIndex(c, scan.angle_increment, params_.split_gap_ratio,
+                                                  params_.split_min_gap_beams)
+                                  : 0;
+    if (split == 0) {
+      legs.push_back({legCenter(centroid), conf, width, moving});
+      continue;
+    }
+    // Two legs in one cluster: each part is a leg with the cluster's score and motion.
+    for (const auto& [begin, end] : {std::pair<std::size_t, std::size_t>{0, split}, {split, c.points.size()}}) {
+      Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+      for (std::size_t i = begin; i < end; ++i) sum += c.points[i];
+      legs.push_back({legCenter(sum / static_cast<double>(end - begin)), conf,
+                      (c.points[begin] - c.points[end - 1]).norm(), moving});
+    }
   }
   return legs;
 }

@@ -59,4 +59,19 @@ std::vector<Cluster> segmentScan(const LaserScan& scan, const SegmentationParams
   return out;
 }
 
+std::size_t gapSplitIndex(const Cluster& c, double angle_increment, double gap_ratio, double min_gap_beams) {
+  const std::size_t n = c.points.size();
+  if (n < 3) return 0;
+  std::vector<double> gaps(n - 1);
+  for (std::size_t i = 1; i < n; ++i) gaps[i - 1] = (c.points[i] - c.points[i - 1]).norm();
+  const auto largest = std::max_element(gaps.begin(), gaps.end());
+  const double step = *largest;
+  const std::size_t index = static_cast<std::size_t>(largest - gaps.begin()) + 1;
+  gaps.erase(largest);
+  const auto mid = gaps.begin() + static_cast<long>(gaps.size() / 2);
+  std::nth_element(gaps.begin(), mid, gaps.end());
+  const double spacing = c.centroid().norm() * std::abs(angle_increment);
+  return step >= gap_ratio * *mid && step >= min_gap_beams * spacing ? index : 0;
+}
+
 }  // namespace cairn::people_tracking

@@ -444,3 +444,43 @@ TEST(PersonDetector, KeepsOneAndTwoPointClustersOnlyBeyondSmallClusterMinRange) 
   EXPECT_EQ(DetectorParams{}.segmentation.min_points, 1u);
   EXPECT_EQ(SegmentationParams{}.min_points, 3u);  // what the classifier is trained on
 }
+
+// Two legs of one person in one cluster (DetectorParams::split_min_width, gapSplitIndex): two legs near their true
+// centres instead of one leg between them; with the split off, one. A single leg is never split.
+TEST(PersonDetector, SplitsTwoLegsInOneClusterIntoTwo) {
+  LaserModel laser;
+  laser.noise_sigma = 0.0;
+  laser.dropout_prob = 0.0;
+  std::mt19937_64 rng(1);
+  const Eigen::Vector2d a(5.0, 0.0), b(5.12, 0.16);
+  Scene scene;
+  scene.addCircle(a, 0.06, ObjectClass::kPersonLeg, 0);
+  scene.addCircle(b, 0.06, ObjectClass::kPersonLeg, 0);
+  scene.addCircle({4.0, -2.0}, 0.07, ObjectClass::kPersonLeg, 1);  // someone else's leg, alone
+  const LaserScan scan = renderScan(scene, Pose2{}, laser, 1.0, rng).scan;
+  DetectorParams p;
+  p.track_leg_confidence = 0.0;  // every cluster: the test is about the split, not the classifier
+  p.min_leg_confidence = 0.0;
+  auto legsNear = [&](const DetectorParams& dp, const Eigen::Vector2d& centre) {
+    std::vector<LegDetection> near;
+    for (const LegDetection& l : PersonDetector(shippedModel(), dp).detectLegs(scan))
+      if ((l.position - centre).norm() < 0.4) near.push_back(l);
+    return near;
+  };
+  const auto split = legsNear(p, 0.5 * (a + b));
+  ASSERT_EQ(split.size(), 2u);
+  const bool ordered = (split[0].position - a).norm() < (split[1].position - a).norm();
+  const LegDetection& la = ordered ? split[0] : split[1];
+  const LegDetection& lb = ordered ? split[1] : split[0];
+  EXPECT_LT((la.position - a).norm(), 0.05);
+  EXPECT_LT((lb.position - b).norm(), 0.06);  // partly hidden: its visible arc is off its centre
+  EXPECT_DOUBLE_EQ(la.confidence, lb.confidence);  // the cluster's score for both
+  EXPECT_EQ(legsNear(p, {4.0, -2.0}).size(), 1u);
+  DetectorParams off = p;
+  off.split_min_width = off.max_leg_width + 0.1;
+  const auto merged = legsNear(off, 0.5 * (a + b));
+  ASSERT_EQ(merged.size(), 1u);
+  EXPECT_GT(merged[0].width, p.split_min_width);
+  EXPECT_GT((merged[0].position - a).norm(), 0.05);  // between the two
+}
+

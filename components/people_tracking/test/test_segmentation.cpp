@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "cairn/people_tracking/scene.hpp"
 #include "cairn/people_tracking/segmentation.hpp"
 
 using namespace cairn::people_tracking;
@@ -85,3 +86,50 @@ TEST(Segmentation, RejectsBadMetadata) {
   EXPECT_THROW(segmentScan(bad), InputError);
   EXPECT_NO_THROW(segmentScan(s));
 }
+
+// Two legs, one partly behind the other (0.12 m deeper, 0.16 m to the side) at 5 m: closer in depth than the jump
+// threshold (0.19 m there), so one cluster, split by gapSplitIndex at the step from one leg to the other; one leg,
+// one leg with a missing return and a wall are not split.
+TEST(Segmentation, GapSplitFindsTheStepBetweenTwoLegsInOneCluster) {
+  LaserModel laser;
+  laser.noise_sigma = 0.0;
+  laser.dropout_prob = 0.0;
+  std::mt19937_64 rng(1);
+  Scene two;
+  two.addCircle({5.0, 0.0}, 0.06, ObjectClass::kPersonLeg, 0);
+  two.addCircle({5.12, 0.16}, 0.06, ObjectClass::kPersonLeg, 0);
+  const SimScan sim = renderScan(two, Pose2{}, laser, 0.0, rng);
+  const auto clusters = segmentScan(sim.scan);
+  ASSERT_EQ(clusters.size(), 1u);
+  const Cluster& c = clusters[0];
+  const std::size_t i = gapSplitIndex(c, sim.scan.angle_increment, 2.5, 2.5);
+  ASSERT_GT(i, 0u);
+  ASSERT_LT(i, c.points.size());
+  // Every return before the split is on one leg, every one after it on the other.
+  for (std::size_t k = 0; k < c.points.size(); ++k)
+    EXPECT_EQ(sim.hit_object[c.beams[k]], sim.hit_object[c.beams[k < i ? 0 : c.points.size() - 1]]) << k;
+  EXPECT_NE(sim.hit_object[c.beams[0]], sim.hit_object[c.beams.back()]);
+  // The step must stand out from the other distances by gap_ratio.
+  EXPECT_EQ(gapSplitIndex(c, sim.scan.angle_increment, 100.0, 2.5), 0u);
+
+  Scene one;
+  one.addCircle({5.0, 0.0}, 0.08, ObjectClass::kPersonLeg, 0);
+  SimScan leg = renderScan(one, Pose2{}, laser, 0.0, rng);
+  const auto single = segmentScan(leg.scan);
+  ASSERT_EQ(single.size(), 1u);
+  EXPECT_EQ(gapSplitIndex(single[0], leg.scan.angle_increment, 2.5, 2.5), 0u);
+  // One missing return inside the leg (tolerated by the segmentation): a step of two beam spacings.
+  leg.scan.ranges[single[0].beams[single[0].beams.size() / 2]] = std::numeric_limits<float>::quiet_NaN();
+  const auto dropped = segmentScan(leg.scan);
+  ASSERT_EQ(dropped.size(), 1u);
+  EXPECT_EQ(gapSplitIndex(dropped[0], leg.scan.angle_increment, 2.5, 2.5), 0u);
+
+  LaserScan wall = makeScan(40, 0.01, 3.0f);
+  const auto flat = segmentScan(wall);
+  ASSERT_EQ(flat.size(), 1u);
+  EXPECT_EQ(gapSplitIndex(flat[0], wall.angle_increment, 2.5, 2.5), 0u);
+  Cluster two_points;
+  two_points.points = {{5.0, 0.0}, {5.2, 0.3}};
+  EXPECT_EQ(gapSplitIndex(two_points, 0.01, 2.5, 2.5), 0u);
+}
+

@@ -103,6 +103,9 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--min-leg-confidence") p.detector.min_leg_confidence = param(value(), "detector.min_leg_confidence");
     else if (a == "--pair-distance") p.detector.max_leg_pair_distance = param(value(), "detector.max_leg_pair_distance");
     else if (a == "--min-points") p.detector.segmentation.min_points = static_cast<int>(integerParam(value(), "segmentation.min_points"));
+    else if (a == "--split-min-width") p.detector.split_min_width = param(value(), "detector.split_min_width");
+    else if (a == "--split-gap-ratio") p.detector.split_gap_ratio = param(value(), "detector.split_gap_ratio");
+    else if (a == "--split-min-gap-beams") p.detector.split_min_gap_beams = param(value(), "detector.split_min_gap_beams");
     else if (a == "--small-cluster-min-range")
       p.detector.small_cluster_min_range = param(value(), "detector.small_cluster_min_range");
     else if (a == "--sigma-pair") p.detector.sigma_pair = param(value(), "detector.sigma_pair");

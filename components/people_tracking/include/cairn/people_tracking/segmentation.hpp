@@ -36,4 +36,12 @@ struct Cluster {
 // Throws InputError on malformed scan metadata (validateScan). NaN/inf beams split clusters.
 std::vector<Cluster> segmentScan(const LaserScan& scan, const SegmentationParams& params = {});
 
+// Two objects in one cluster. Where one leg stands partly behind the other, closer in depth than the jump threshold
+// (0.22 m at 7 m), both legs form one cluster; inside each leg consecutive returns are about a beam spacing apart,
+// the step between the legs is several spacings. Returns the index i (0 < i < n) such that points [0, i) and
+// [i, n) are the two objects, or 0 for none: the largest distance between consecutive returns, when it is at least
+// gap_ratio times the median of the other distances and min_gap_beams beam spacings at the cluster's range (one
+// missing return inside an object makes two spacings). Clusters of fewer than 3 points are never split.
+std::size_t gapSplitIndex(const Cluster& c, double angle_increment, double gap_ratio, double min_gap_beams);
+
 }  // namespace cairn::people_tracking
