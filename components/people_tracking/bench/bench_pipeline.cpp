@@ -111,6 +111,12 @@ void BM_DetectAndTrack30People_GNN_PlainBirths(benchmark::State& state) {
   mp.min_free_scans = 1;
   runPipeline(state, Association::kGnn, true, true, true, dp, mp);
 }
+// One leg per cluster (before two legs in one cluster were split, DetectorParams::split_min_width): its cost.
+void BM_DetectAndTrack30People_GNN_NoSplit(benchmark::State& state) {
+  DetectorParams dp;
+  dp.split_min_width = dp.max_leg_width + 0.1;
+  runPipeline(state, Association::kGnn, true, true, true, dp);
+}
 void BM_DetectAndTrack30People_GNN_DetectorPairing(benchmark::State& state) {
   runPipeline(state, Association::kGnn, false, false);
 }
@@ -158,5 +164,6 @@ BENCHMARK(BM_DetectAndTrack30People_GNN_NoMotionEvidence);
 BENCHMARK(BM_DetectAndTrack30People_GNN_PerLegPairing);
 BENCHMARK(BM_DetectAndTrack30People_GNN_MinPoints3);
 BENCHMARK(BM_DetectAndTrack30People_GNN_PlainBirths);
+BENCHMARK(BM_DetectAndTrack30People_GNN_NoSplit);
 BENCHMARK(BM_DetectAndTrack30People_GNN_DetectorPairing);
 BENCHMARK_MAIN();
