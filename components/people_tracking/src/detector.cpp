@@ -34,6 +34,11 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
   std::vector<Eigen::Vector2d> in_frame;
   const Eigen::Matrix2d R = sensor_pose.rotation();  // sensor -> tracking frame, once per scan
   const Eigen::Vector2d t(sensor_pose.x, sensor_pose.y);
+  // The leg's centre lies behind its visible surface along the beam.
+  auto legCenter = [&](const Eigen::Vector2d& surface) -> Eigen::Vector2d {
+    const double r = surface.norm();
+    return r > 1e-6 ? Eigen::Vector2d(surface * (1.0 + params_.leg_center_offset / r)) : surface;
+  };
   for (const Cluster& c : segmentScan(scan, params_.segmentation)) {
     const Eigen::Vector2d centroid = c.centroid();
     const double range = centroid.norm();
@@ -54,11 +59,6 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
       const bool is_moving = use_motion && moving >= params_.moving_fraction;
       if (conf < plain && !(is_moving && conf >= params_.moving_track_leg_confidence)) continue;
     }
-    // The leg's centre lies behind its visible surface along the beam.
-    auto legCenter = [&](const Eigen::Vector2d& surface) -> Eigen::Vector2d {
-      const double r = surface.norm();
-      return r > 1e-6 ? Eigen::Vector2d(surface * (1.0 + params_.leg_center_offset / r)) : surface;
-    };
     const std::size_t split = width >= params_.split_min_width
                                   ? gapSplitIndex(c, scan.angle_increment, params_.split_gap_ratio,
                                                   params_.split_min_gap_beams)
@@ -68,12 +68,8 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
       continue;
     }
     // Two legs in one cluster: each part is a leg with the cluster's score and motion.
-    for (const auto& [begin, end] : {std::pair<std::size_t, std::size_t>{0, split}, {split, c.points.size()}}) {
-      Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-      for (std::size_t i = begin; i < end; ++i) sum += c.points[i];
-      legs.push_back({legCenter(sum / static_cast<double>(end - begin)), conf,
-                      (c.points[begin] - c.points[end - 1]).norm(), moving});
-    }
+    for (const auto& [begin, end] : {std::pair<std::size_t, std::size_t>{0, split}, {split, c.points.size()}})
+      legs.push_back({legCenter(c.centroid(begin, end)), conf, (c.points[begin] - c.points[end - 1]).norm(), moving});
   }
   return legs;
 }

@@ -5,10 +5,12 @@
 
 namespace cairn::people_tracking {
 
-Eigen::Vector2d Cluster::centroid() const {
+Eigen::Vector2d Cluster::centroid() const { return centroid(0, points.size()); }
+
+Eigen::Vector2d Cluster::centroid(std::size_t begin, std::size_t end) const {
   Eigen::Vector2d c = Eigen::Vector2d::Zero();
-  for (const auto& p : points) c += p;
-  return points.empty() ? c : Eigen::Vector2d(c / static_cast<double>(points.size()));
+  for (std::size_t i = begin; i < end; ++i) c += points[i];
+  return end > begin ? Eigen::Vector2d(c / static_cast<double>(end - begin)) : c;
 }
 
 std::vector<Cluster> segmentScan(const LaserScan& scan, const SegmentationParams& params) {

@@ -31,6 +31,8 @@ struct Cluster {
   double jump_prev = 0.0;              // distance from first point to the preceding valid return (capped)
   double jump_next = 0.0;              // distance from last point to the following valid return (capped)
   [[nodiscard]] Eigen::Vector2d centroid() const;
+  // Mean of points [begin, end) (a part of the cluster, e.g. one of two legs: gapSplitIndex).
+  [[nodiscard]] Eigen::Vector2d centroid(std::size_t begin, std::size_t end) const;
 };
 
 // Throws InputError on malformed scan metadata (validateScan). NaN/inf beams split clusters.
