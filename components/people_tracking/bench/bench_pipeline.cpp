@@ -117,6 +117,12 @@ void BM_DetectAndTrack30People_GNN_NoSplit(benchmark::State& state) {
   dp.split_min_width = dp.max_leg_width + 0.1;
   runPipeline(state, Association::kGnn, true, true, true, dp);
 }
+// Without the free-space memory (MotionEvidenceParams::memory 0, before it existed): its cost.
+void BM_DetectAndTrack30People_GNN_NoMemory(benchmark::State& state) {
+  MotionEvidenceParams mp;
+  mp.memory = 0.0;
+  runPipeline(state, Association::kGnn, true, true, true, DetectorParams{}, mp);
+}
 void BM_DetectAndTrack30People_GNN_DetectorPairing(benchmark::State& state) {
   runPipeline(state, Association::kGnn, false, false);
 }
@@ -165,5 +171,6 @@ BENCHMARK(BM_DetectAndTrack30People_GNN_PerLegPairing);
 BENCHMARK(BM_DetectAndTrack30People_GNN_MinPoints3);
 BENCHMARK(BM_DetectAndTrack30People_GNN_PlainBirths);
 BENCHMARK(BM_DetectAndTrack30People_GNN_NoSplit);
+BENCHMARK(BM_DetectAndTrack30People_GNN_NoMemory);
 BENCHMARK(BM_DetectAndTrack30People_GNN_DetectorPairing);
 BENCHMARK_MAIN();

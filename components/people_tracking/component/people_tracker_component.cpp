@@ -130,6 +130,9 @@ class PeopleTracker : public cairn::Node {
                         "score a moving cluster needs to update existing tracks");
     declareRuntimeField("detector.moving_min_leg_confidence", dp, detector_params_, &pt::DetectorParams::moving_min_leg_confidence,
                         "score a moving cluster needs to form persons and start tracks");
+    declareRuntimeField("detector.crossed_track_leg_confidence", dp, detector_params_,
+                        &pt::DetectorParams::crossed_track_leg_confidence,
+                        "score a cluster where the beams went through earlier (not static background) needs to update tracks");
     // Motion evidence (motion_evidence.hpp): the scans of the last motion.window seconds.
     pt::MotionEvidenceParams mp;
     mp.window = declareRanged<double>("motion.window", mp.window, "s of earlier scans consulted for motion evidence (0 = off)");
@@ -137,6 +140,12 @@ class PeopleTracker : public cairn::Node {
     mp.margin = declareRanged<double>("motion.margin", mp.margin, "m, an earlier beam must end this far behind a point to see it free");
     mp.min_free_scans = static_cast<std::size_t>(declareRanged<int64_t>("motion.min_free_scans", static_cast<int64_t>(mp.min_free_scans),
                                                                         "earlier scans that must see a point free"));
+    // Free-space memory (FreeSpaceMemory): where the beams went through, in a grid around the robot.
+    mp.memory = declareRanged<double>("motion.memory", mp.memory, "s a place the beams went through is remembered as free (0 = off)");
+    mp.memory_resolution = declareRanged<double>("motion.memory_resolution", mp.memory_resolution, "m, cell of the free-space memory");
+    mp.memory_size = declareRanged<double>("motion.memory_size", mp.memory_size, "m, side of the free-space memory's grid around the robot");
+    mp.memory_surface_gap = declareRanged<double>("motion.memory_surface_gap", mp.memory_surface_gap,
+                                                  "m, consecutive returns closer than this are one surface (not free between them)");
     declareRuntimeField("detector.small_cluster_min_range", dp, detector_params_, &pt::DetectorParams::small_cluster_min_range,
                         "m, clusters of 1-2 points closer than this are dropped");
     declareRuntimeField("detector.max_range", dp, detector_params_, &pt::DetectorParams::max_range,

@@ -465,7 +465,7 @@ std::string benchJson(const BenchParams& p, const BenchResult& r) {
     }
     o << "]";
   }
-  o << ", \"motion_window_s\": " << p.motion.window;
+  o << ", \"motion_window_s\": " << p.motion.window << ", \"motion_memory_s\": " << p.motion.memory;
   o << ", \"static_map\": " << (p.static_map ? "true" : "false");
   if (p.camera.fov > 0.0)
     o << ", \"camera\": {\"fov_deg\": " << p.camera.fov * 180.0 / M_PI << ", \"range_m\": " << p.camera.range

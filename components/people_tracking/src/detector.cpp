@@ -24,9 +24,10 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
   const double track = static_map ? params_.track_leg_confidence_with_map : params_.track_leg_confidence;
   const double plain = std::min(params_.min_leg_confidence, track);
   const bool use_motion = motion != nullptr && motion->size() > 0;
-  const double floor = use_motion ? std::min({plain, params_.moving_track_leg_confidence,
-                                              params_.moving_min_leg_confidence})
-                                  : plain;
+  const bool use_memory = motion != nullptr && motion->remembersFreeSpace();
+  double floor = use_motion ? std::min({plain, params_.moving_track_leg_confidence, params_.moving_min_leg_confidence})
+                            : plain;
+  if (use_memory) floor = std::min(floor, params_.crossed_track_leg_confidence);
   // Moving clusters may also form persons below min_leg_confidence (and single persons below
   // single_leg_min_confidence): then clusters scored in between are checked too.
   const bool moving_births = params_.moving_min_leg_confidence < params_.min_leg_confidence;
@@ -57,7 +58,12 @@ std::vector<LegDetection> PersonDetector::detectLegs(const LaserScan& scan, cons
         moving = motion->freeFraction(in_frame, scan.stamp, params_.moving_fraction);
       }
       const bool is_moving = use_motion && moving >= params_.moving_fraction;
-      if (conf < plain && !(is_moving && conf >= params_.moving_track_leg_confidence)) continue;
+      // Not moving, but where the beams went through earlier: not the static background (crossedBefore). Asked at
+      // the surface the beams see: the point behind a wall's end may lie in the free space beyond it.
+      if (conf < plain && !(is_moving && conf >= params_.moving_track_leg_confidence) &&
+          !(use_memory && conf >= params_.crossed_track_leg_confidence &&
+            motion->crossedBefore(R * centroid + t, scan.stamp)))
+        continue;
     }
     const std::size_t split = width >= params_.split_min_width
                                   ? gapSplitIndex(c, scan.angle_increment, params_.split_gap_ratio,

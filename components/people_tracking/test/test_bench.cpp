@@ -227,6 +227,7 @@ TEST(Bench, WithTheStaticMapWeakLegsUpdateTracks) {
       EXPECT_NE(benchJson(p, mapped).find("\"static_map\": true"), std::string::npos);
     }
     p.detector.track_leg_confidence_with_map = p.detector.track_leg_confidence;
+    p.motion.memory = 0.0;  // its weak legs off the background would pass as with the map
     const BenchResult strict = runBench(p);
     EXPECT_EQ(mapped.cairn.mot.gt, strict.cairn.mot.gt);  // same scans, same counted people
     p.static_map = false;
@@ -241,12 +242,44 @@ TEST(Bench, WithTheStaticMapWeakLegsUpdateTracks) {
   EXPECT_GT(fp_unmapped, 2 * fp_mapped);
 }
 
+// The free-space memory (motion_evidence.hpp) in place of a static map: clusters where the beams went through
+// earlier update tracks whatever their score (crossed_track_leg_confidence 0), the static background keeps the
+// 0.2 threshold. Fewer people missed than without it, and far fewer false positives than letting every cluster
+// update tracks (track_leg_confidence 0), which the wall returns turn into false tracks.
+TEST(Bench, FreeSpaceMemoryLetsWeakLegsUpdateTracksOffTheBackground) {
+  std::size_t fn_memory = 0, fn_without = 0, fp_memory = 0, fp_without = 0, fp_all = 0;
+  for (const std::uint64_t seed : {1, 2, 3, 4, 5}) {
+    BenchParams p = excerpt();
+    p.seed = seed;
+    const BenchResult memory = runBench(p);
+    p.motion.memory = 0.0;
+    const BenchResult without = runBench(p);
+    if (seed == 1) {
+      EXPECT_NE(benchJson(p, without).find("\"motion_memory_s\": 0"), std::string::npos);
+    }
+    EXPECT_EQ(memory.cairn.mot.gt, without.cairn.mot.gt);  // same scans, same counted people
+    p.detector.track_leg_confidence = 0.0;
+    const BenchResult all = runBench(p);
+    fn_memory += memory.cairn.mot.fn;
+    fn_without += without.cairn.mot.fn;
+    fp_memory += memory.cairn.mot.fp;
+    fp_without += without.cairn.mot.fp;
+    fp_all += all.cairn.mot.fp;
+  }
+  EXPECT_LT(fn_memory, fn_without);  // 158 vs 192 when written
+  EXPECT_LT(fp_memory, 2 * fp_without);  // 100 vs 68
+  EXPECT_LT(3 * fp_memory, fp_all);     // vs 413
+  BenchParams bad = excerpt();
+  bad.motion.memory_resolution = 0.0;
+  EXPECT_THROW(runBench(bad), InputError);
+}
+
 // --beams: the 360 deg scan's resolution. Half the beams (0.67 deg) leave fewer people hit by the 3 beams that
-// make them count, and the tracker misses a larger share of those it counts (seeds 1-3 summed; MOTA is not
-// compared: the two count different people, and fewer beams also give fewer false positives).
-TEST(Bench, CoarserLaserCountsFewerPeopleAndTracksWorse) {
+// make them count. (Before the free-space memory the tracker also missed a larger share of those it counted, 3.3
+// vs 2.6 %; with it, it misses a smaller one, 1.6 vs 2.2 % on seeds 1-6: the people the coarser scan counts are
+// the nearer ones, and the memory keeps their tracks. Not asserted either way.)
+TEST(Bench, CoarserLaserCountsFewerPeople) {
   BenchParams p = excerpt();
-  std::size_t fine_fn = 0, fine_gt = 0, coarse_fn = 0, coarse_gt = 0;
   for (const std::uint64_t seed : {1, 2, 3}) {
     p.seed = seed;
     p.laser_beams = 1080;
@@ -254,13 +287,9 @@ TEST(Bench, CoarserLaserCountsFewerPeopleAndTracksWorse) {
     p.laser_beams = 540;
     const BenchResult coarse = runBench(p);
     EXPECT_LT(coarse.mean_people_counted, fine.mean_people_counted);
-    fine_fn += fine.cairn.mot.fn;
-    fine_gt += fine.cairn.mot.gt;
-    coarse_fn += coarse.cairn.mot.fn;
-    coarse_gt += coarse.cairn.mot.gt;
+    EXPECT_LT(coarse.cairn.mot.gt, fine.cairn.mot.gt);
+    EXPECT_NE(benchJson(p, coarse).find("\"laser_beams\": 540"), std::string::npos);
   }
-  EXPECT_GT(static_cast<double>(coarse_fn) / static_cast<double>(coarse_gt),
-            static_cast<double>(fine_fn) / static_cast<double>(fine_gt));
   p.laser_beams = 4;
   EXPECT_THROW(runBench(p), InputError);
 }

@@ -356,7 +356,9 @@ TEST(PeopleTrackerComponent, TracksWalkingPeopleOverDdsWithStableIdsFollowsAndMa
       EXPECT_EQ(*b, *id_b) << "person B changed id at scan " << k;
     }
     for (const auto& tr : msg->tracks) {
-      EXPECT_LT(std::hypot(tr.velocity.x, tr.velocity.y), 2.0) << "implausible speed of track " << tr.track_id;
+      EXPECT_LT(std::hypot(tr.velocity.x, tr.velocity.y), 2.0)
+          << "implausible speed of track " << tr.track_id << " at (" << tr.position.x << ", " << tr.position.y
+          << "), scan " << k;
     }
   }
   ASSERT_GE(considered, steps - 15 - 5);

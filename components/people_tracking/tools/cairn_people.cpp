@@ -106,6 +106,7 @@ void usage() {
       "        [--adaptive-nis T] (0 = off) [--adaptive-gain G] [--adaptive-smoothing W]   (adaptive process noise)\n"
       "        motion evidence: [--motion-window S] (0 = off) [--motion-min-age S] [--motion-margin M] [--motion-min-free-scans N] [--moving-fraction F]\n"
       "        [--moving-track-leg-confidence C] [--moving-min-leg-confidence C]\n"
+      "        free-space memory: [--motion-memory S] (0 = off) [--crossed-track-leg-confidence C]\n"
       "        second source: [--camera FOV_DEG] [--camera-range M] [--camera-bearing-sigma DEG] [--camera-range-sigma R]\n"
       "        [--camera-pd P] [--camera-false N] [--fusion-distance M] [--fusion-gate CHI2]\n"
       "        diagnostic: [--oracle-detections] [--oracle-sigma M]   (true positions instead of the detector)\n"

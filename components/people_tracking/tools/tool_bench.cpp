@@ -94,6 +94,9 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--moving-track-leg-confidence") p.detector.moving_track_leg_confidence = param(value(), "detector.moving_track_leg_confidence");
     else if (a == "--moving-min-leg-confidence") p.detector.moving_min_leg_confidence = param(value(), "detector.moving_min_leg_confidence");
     else if (a == "--motion-window") p.motion.window = param(value(), "motion.window");
+    else if (a == "--motion-memory") p.motion.memory = param(value(), "motion.memory");
+    else if (a == "--crossed-track-leg-confidence")
+      p.detector.crossed_track_leg_confidence = param(value(), "detector.crossed_track_leg_confidence");
     else if (a == "--motion-min-age") p.motion.min_age = param(value(), "motion.min_age");
     else if (a == "--motion-margin") p.motion.margin = param(value(), "motion.margin");
     else if (a == "--motion-min-free-scans")

@@ -70,6 +70,13 @@ struct DetectorParams {
   double moving_fraction = 0.5;
   double moving_track_leg_confidence = 0.0;
   double moving_min_leg_confidence = 0.0;
+  // Clusters standing where the beams went through within the last MotionEvidenceParams::memory seconds
+  // (MotionEvidence::crossedBefore at the leg centre: not the static background, which is never crossed) update
+  // tracks from this score, as every cluster does with a static map (track_leg_confidence_with_map): what the map
+  // gives, learned from the scans. Persons and new tracks keep min_leg_confidence. A value >= track_leg_confidence
+  // turns it off. 54 bench runs without a map: IDSW 351 -> 252 (the true map in its place: 246), FP +1.3 %, FN -12 %
+  // (docs/benchmarks.md "Free-space memory"). Our choice.
+  double crossed_track_leg_confidence = 0.0;
   double max_range = 10.0;             // m, clusters beyond are ignored
   // Clusters of fewer points than the classifier learned from (SegmentationParams{}.min_points, 3) closer than this
   // are dropped: at 3 m a leg spans about 6 beams at 0.33 deg, so one or two are a sliver of a hidden leg or
@@ -106,7 +113,8 @@ class PersonDetector {
   std::vector<PersonDetection> detect(const LaserScan& scan, std::vector<LegDetection>* legs = nullptr) const;
   // Leg detections only (sensor frame), for PeopleTracker::updateLegs. Throws InputError on malformed scans.
   // With `motion` (the history of earlier scans) and the sensor pose in its frame at the scan stamp, clusters
-  // scored below the plain thresholds get LegDetection::moving and pass with the moving_* thresholds. The caller
+  // scored below the plain thresholds get LegDetection::moving and pass with the moving_* thresholds, and those
+  // standing where the beams went through earlier (its free-space memory) with crossed_track_leg_confidence. The caller
   // adds the scan to `motion` afterwards. `static_map`: the tracker the legs go to has a static map
   // (PeopleTracker::hasStaticMap), so track_leg_confidence_with_map replaces track_leg_confidence.
   [[nodiscard]] std::vector<LegDetection> detectLegs(const LaserScan& scan, const MotionEvidence* motion = nullptr,

@@ -19,7 +19,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <deque>
+#include <limits>
 #include <vector>
 
 #include "cairn/people_tracking/scan.hpp"
@@ -37,6 +39,77 @@ struct MotionEvidenceParams {
   // "Moving legs start tracks"). A walking person's legs stand where most of the window's scans saw free space.
   std::size_t min_free_scans = 2;
   std::size_t max_scans = 64;  // kept at most (fast lasers: the oldest are dropped first)
+  // Free-space memory (FreeSpaceMemory below): a place the beams crossed within the last `memory` seconds is not
+  // static background. 0 disables it.
+  double memory = 60.0;            // s
+  double memory_resolution = 0.1;  // m, grid cell (at most the beam spacing at the detector's range: 5.8 cm at 10 m
+                                   // and 0.33 deg, so that every cell there is crossed by some beam)
+  double memory_size = 40.0;       // m, side of the square grid kept around the sensor (twice the range that matters)
+  // m, consecutive returns closer than this are one surface: the cells between them are not free (a wall seen at a
+  // grazing angle). Our choice: at 8 m and 0.33 deg a wall's returns are 1 m apart at 2.7 deg incidence.
+  double memory_surface_gap = 1.0;
+};
+
+// Where the beams have gone through, remembered for a long time: the static background (walls, furniture) is never
+// free, the place a person stands on was free before the person came (unless the person stood there, hidden or out
+// of range, since the sensor first looked). A grid in the tracking frame counts per cell the scans that saw it free
+// -- a beam crossed the whole cell and ended at least `margin` beyond it (ray traversal, Amanatides & Woo 1987)
+// while no return of that scan lay in the cell, its eight neighbours, or on the surface between two consecutive
+// returns less than `surface_gap` apart -- and the scans with such a return. A cell is free when it was seen free
+// in at least `min_free_scans` scans, in more scans than it had a return, and within `memory` seconds; a place is
+// free when its cell and the eight around it are. Each rule is there for a case (tests FreeSpaceMemory.*): a chair
+// leg thinner than a cell has its cells crossed by the beams passing on both sides of it (the neighbour rule); a
+// wall seen at a grazing angle has returns decimetres apart and the beams graze the cells between them (the surface
+// rule); behind a door opening, a corridor wall's cells are crossed through the opening in the scans where a person
+// hides the wall's returns (the count); a box's corner seen at a grazing angle has a return in every other scan and
+// is crossed in the others (the place rule: the box's inside is never free). A beam without a return (+inf:
+// nothing within range_max) crosses up to range_max, or up to a neighbouring beam's return when it has one (a
+// single missing return on a wall must not cross the wall); NaN and returns below range_min give no information.
+// Limits: a face of a wide object first seen from a new viewpoint, whose cells the beams grazing its corners crossed
+// before, can read as free until it has been seen as often; a person standing still longer than the place was
+// seen free before becomes background. The grid follows the sensor: when the sensor leaves the middle half, the
+// grid is moved by whole cells (cells that fall outside are forgotten). Not from the seeds: the static map the
+// tracker otherwise needs (SPENCER; "Weak legs with a static map" in docs/benchmarks.md), learned from the scans
+// alone, in the spirit of the free-space evidence of occupancy-grid mapping.
+class FreeSpaceMemory {
+ public:
+  // Throws InputError unless resolution > 0, 4 * resolution <= size <= 20000 * resolution, margin >= 0, memory >= 0
+  // and min_free_scans >= 1.
+  FreeSpaceMemory(double resolution, double size, double margin, double memory, std::size_t min_free_scans,
+                  double surface_gap);
+  // Marks the cells the scan saw free (sensor pose in the tracking frame). A stamp before the newest added clears
+  // the memory first (time went backwards). The scan must have passed validateScan; a pose that is not finite or
+  // beyond 1e9 m is ignored.
+  void add(const LaserScan& scan, const Pose2& sensor_pose);
+  // Whether the cell holding p (tracking frame) and its eight neighbours were each seen free (above) within
+  // [stamp - memory, stamp].
+  [[nodiscard]] bool seenFree(const Eigen::Vector2d& p, double stamp) const;
+  [[nodiscard]] bool enabled() const { return memory_ > 0.0; }
+  void clear();
+
+ private:
+  void follow(const Eigen::Vector2d& sensor);  // moves the grid so that the sensor is in its middle half
+  [[nodiscard]] long cellIndex(const Eigen::Vector2d& p) const;  // -1 outside the grid
+  // Visits the cells a ray from `from` (tracking frame) crosses completely within `length`.
+  template <typename Visit>
+  void cross(const Eigen::Vector2d& from, double angle, double length, Visit&& visit) const;
+
+  double resolution_, size_, margin_, memory_, surface_gap_;
+  std::uint16_t min_free_scans_;
+  int cells_ = 0;  // per side
+  Eigen::Vector2d origin_ = Eigen::Vector2d::Zero();  // tracking-frame corner of cell (0, 0)
+  struct Cell {
+    float last_free = 0.0F;         // stamp (seconds after epoch_) of the last scan that saw the cell free
+    std::uint32_t near_return = 0;  // number of the last scan with a return in this cell or a neighbour
+    std::uint32_t crossed = 0;      // number of the last scan that saw it free
+    std::uint16_t near_scans = 0;   // scans with a return in the cell or a neighbour
+    std::uint16_t free_scans = 0;   // scans that saw the cell free
+  };
+  static void count(std::uint16_t& counter, Cell& cell);  // +1, both halved first when it would overflow
+  std::vector<Cell> grid_;
+  std::uint32_t scan_number_ = 0;
+  double epoch_ = 0.0, newest_ = 0.0;  // float stamps keep sub-millisecond resolution relative to the epoch
+  bool empty_ = true;
 };
 
 class MotionEvidence {
@@ -55,6 +128,12 @@ class MotionEvidence {
                                     double stop_below = 0.0) const;
   // Whether one earlier scan saw `p` (tracking frame) as free space.
   [[nodiscard]] bool seenFree(const Eigen::Vector2d& p, double stamp) const;
+  // Whether the beams crossed the place of `p` (tracking frame) within the last `memory` seconds: not part of the
+  // static background (FreeSpaceMemory). False with memory 0.
+  [[nodiscard]] bool crossedBefore(const Eigen::Vector2d& p, double stamp) const {
+    return memory_.seenFree(p, stamp);
+  }
+  [[nodiscard]] bool remembersFreeSpace() const { return memory_.enabled(); }
   [[nodiscard]] std::size_t size() const { return history_.size(); }
 
  private:
@@ -68,6 +147,7 @@ class MotionEvidence {
 
   MotionEvidenceParams params_;
   std::deque<Past> history_;
+  FreeSpaceMemory memory_;
 };
 
 }  // namespace cairn::people_tracking
