@@ -1,6 +1,7 @@
 #include "cairn/people_tracking/motion_evidence.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -46,6 +47,8 @@ void FreeSpaceMemory::follow(const Eigen::Vector2d& sensor) {
   cells_ = static_cast<int>(n);
   origin_ = origin;
   grid_.swap(moved);
+  near_now_.assign((grid_.size() + 63) / 64, 0);
+  crossed_now_.assign(near_now_.size(), 0);
 }
 
 void FreeSpaceMemory::count(std::uint16_t& counter, Cell& cell) {
@@ -91,9 +94,11 @@ void FreeSpaceMemory::add(const LaserScan& scan, const Pose2& sensor_pose) {
   if (empty_) epoch_ = scan.stamp;
   empty_ = false;
   newest_ = scan.stamp;
-  ++scan_number_;
   const Eigen::Vector2d sensor(sensor_pose.x, sensor_pose.y);
   follow(sensor);
+  // This scan's marks: one bit per cell, small enough to stay in cache while the rays are walked.
+  std::fill(near_now_.begin(), near_now_.end(), 0);
+  std::fill(crossed_now_.begin(), crossed_now_.end(), 0);
   const std::size_t n = scan.ranges.size();
   const double span = std::abs(scan.angle_increment) * static_cast<double>(n);
   const bool full_circle = span >= 2.0 * M_PI - 1e-6;
@@ -104,10 +109,7 @@ void FreeSpaceMemory::add(const LaserScan& scan, const Pose2& sensor_pose) {
     const long x = c % cells_, y = c / cells_;
     for (long yy = std::max(0L, y - 1); yy <= std::min<long>(cells_ - 1, y + 1); ++yy)
       for (long xx = std::max(0L, x - 1); xx <= std::min<long>(cells_ - 1, x + 1); ++xx) {
-        Cell& cell = grid_[static_cast<std::size_t>(yy * cells_ + xx)];
-        if (cell.near_return == scan_number_) continue;
-        cell.near_return = scan_number_;
-        count(cell.near_scans, cell);
+        set(near_now_, static_cast<std::size_t>(yy * cells_ + xx));
       }
   };
   // The cells next to a return of this scan, or next to the surface between two consecutive returns less than
@@ -135,6 +137,7 @@ void FreeSpaceMemory::add(const LaserScan& scan, const Pose2& sensor_pose) {
     have_previous = true;
   }
   const auto stamp = static_cast<float>(scan.stamp - epoch_);
+  const double step = std::abs(scan.angle_increment);
   for (std::size_t i = 0; i < n; ++i) {
     double length;
     if (scan.valid(i)) {
@@ -149,14 +152,34 @@ void FreeSpaceMemory::add(const LaserScan& scan, const Pose2& sensor_pose) {
     } else {
       continue;  // NaN or a too-close echo: no information
     }
-    if (length > 0.0)
-      cross(sensor, sensor_pose.theta + scan.angle(i), length, [&](std::size_t c) {
-        Cell& cell = grid_[c];
-        if (cell.near_return == scan_number_ || cell.crossed == scan_number_) return;  // not free, or counted
-        cell.crossed = scan_number_;
+    // Followed up to a quarter of the grid's side (10 m by default: the detector's max_range), the distance to the
+    // grid's edge the sensor always keeps; farther cells are never asked about, and near the edge they would be
+    // moved out soon.
+    length = std::min(length, size_ / 4.0);
+    // Near the sensor the beams are much closer than a cell: every second beam is enough out to where their
+    // spacing reaches a cell, every fourth out to half that distance, and so on. A beam whose index has k trailing
+    // zero bits starts where the beams 2^(k+1) apart stop covering every cell (about 2.4x fewer steps at 0.33 deg
+    // and 10 m; the cells a skipped stretch passes are crossed by the beams beside it).
+    const double start = i == 0 ? 0.0 : resolution_ / (std::ldexp(step, std::countr_zero(i) + 1));
+    if (length > start) {
+      const double angle = sensor_pose.theta + scan.angle(i);
+      const Eigen::Vector2d from = sensor + start * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+      cross(from, angle, length - start, [&](std::size_t c) { set(crossed_now_, c); });
+    }
+  }
+  // The counts, in memory order (the rays above touch only the bits).
+  for (std::size_t w = 0; w < near_now_.size(); ++w) {
+    const std::uint64_t near = near_now_[w], free = crossed_now_[w] & ~near;
+    for (std::uint64_t bits = near | free; bits != 0; bits &= bits - 1) {
+      const auto b = static_cast<std::size_t>(std::countr_zero(bits));
+      Cell& cell = grid_[w * 64 + b];
+      if ((near >> b) & 1U) {
+        count(cell.near_scans, cell);
+      } else {
         count(cell.free_scans, cell);
         cell.last_free = stamp;
-      });
+      }
+    }
   }
 }
 

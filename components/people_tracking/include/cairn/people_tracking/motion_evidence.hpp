@@ -100,14 +100,14 @@ class FreeSpaceMemory {
   Eigen::Vector2d origin_ = Eigen::Vector2d::Zero();  // tracking-frame corner of cell (0, 0)
   struct Cell {
     float last_free = 0.0F;         // stamp (seconds after epoch_) of the last scan that saw the cell free
-    std::uint32_t near_return = 0;  // number of the last scan with a return in this cell or a neighbour
-    std::uint32_t crossed = 0;      // number of the last scan that saw it free
     std::uint16_t near_scans = 0;   // scans with a return in the cell or a neighbour
     std::uint16_t free_scans = 0;   // scans that saw the cell free
   };
   static void count(std::uint16_t& counter, Cell& cell);  // +1, both halved first when it would overflow
   std::vector<Cell> grid_;
-  std::uint32_t scan_number_ = 0;
+  // Per scan, one bit per cell: a return in the cell or a neighbour (not free in this scan); seen free already.
+  std::vector<std::uint64_t> near_now_, crossed_now_;
+  static void set(std::vector<std::uint64_t>& bits, std::size_t i) { bits[i >> 6] |= std::uint64_t{1} << (i & 63); }
   double epoch_ = 0.0, newest_ = 0.0;  // float stamps keep sub-millisecond resolution relative to the epoch
   bool empty_ = true;
 };
