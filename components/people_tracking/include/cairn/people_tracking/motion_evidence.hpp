@@ -44,7 +44,8 @@ struct MotionEvidenceParams {
   double memory = 60.0;            // s
   double memory_resolution = 0.1;  // m, grid cell (at most the beam spacing at the detector's range: 5.8 cm at 10 m
                                    // and 0.33 deg, so that every cell there is crossed by some beam)
-  double memory_size = 40.0;       // m, side of the square grid kept around the sensor (twice the range that matters)
+  double memory_size = 40.0;       // m, side of the square grid kept around the sensor; rays are followed to a quarter
+                                   // of it (10 m: the detector's max_range)
   // m, consecutive returns closer than this are one surface: the cells between them are not free (a wall seen at a
   // grazing angle). Our choice: at 8 m and 0.33 deg a wall's returns are 1 m apart at 2.7 deg incidence.
   double memory_surface_gap = 1.0;
