@@ -11,11 +11,12 @@ FreeSpaceMemory::FreeSpaceMemory(double resolution, double size, double margin, 
                                  std::size_t min_free_scans, double surface_gap)
     : resolution_(resolution), size_(size), margin_(margin), memory_(memory), surface_gap_(surface_gap),
       min_free_scans_(static_cast<std::uint16_t>(std::min<std::size_t>(min_free_scans, 65535))) {
-  if (!(resolution_ > 0.0) || !(size_ >= 4.0 * resolution_) || !(size_ <= 20000.0 * resolution_) ||
+  // At most 4000 x 4000 cells (128 MB): a 400 m grid at 0.1 m, or 80 m at 0.02 m.
+  if (!(resolution_ > 0.0) || !(size_ >= 4.0 * resolution_) || !(size_ <= 4000.0 * resolution_) ||
       !(margin_ >= 0.0) || !(memory_ >= 0.0) || min_free_scans == 0 || !(surface_gap_ >= 0.0) ||
       !std::isfinite(surface_gap_))
-    throw InputError("free-space memory: resolution must be > 0, size in [4, 20000] cells, margin, memory and "
-                     "surface_gap >= 0, min_free_scans >= 1");
+    throw InputError("free-space memory (motion.memory_*): resolution must be > 0, size in [4, 4000] cells, margin, "
+                     "memory and surface_gap >= 0, min_free_scans >= 1");
 }
 
 void FreeSpaceMemory::clear() {

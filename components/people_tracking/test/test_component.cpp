@@ -780,6 +780,15 @@ TEST(PeopleTrackerComponent, LaunchSpecValidatesItsParameters) {
             "");
   e0 = launchError("{motion.window: -1.0}");
   EXPECT_NE(e0.find("motion.window"), std::string::npos) << e0;
+  EXPECT_EQ(launchError("{motion.memory: 120.0, motion.memory_resolution: 0.05, motion.memory_size: 30.0, "
+                        "motion.memory_surface_gap: 0.5, detector.crossed_track_leg_confidence: 0.1}"),
+            "");
+  e0 = launchError("{motion.memory_size: 500.0}");
+  EXPECT_NE(e0.find("motion.memory_size"), std::string::npos) << e0;
+  e0 = launchError("{motion.memory: -1.0}");
+  EXPECT_NE(e0.find("motion.memory"), std::string::npos) << e0;
+  e0 = launchError("{detector.crossed_track_leg_confidence: 2.0}");
+  EXPECT_NE(e0.find("detector.crossed_track_leg_confidence"), std::string::npos) << e0;
   e0 = launchError("{detector.moving_fraction: 1.5}");
   EXPECT_NE(e0.find("detector.moving_fraction"), std::string::npos) << e0;
   e0 = launchError("{tracker.leg_gate_chi2: 0.0}");
@@ -806,4 +815,22 @@ TEST(PeopleTrackerComponent, LaunchSpecValidatesItsParameters) {
   EXPECT_NE(e.find("model_file: 'no_such_model.yml' not found"), std::string::npos) << e;
   e = launchError("{tracker.no_such_param: 1}");
   EXPECT_NE(e.find("tracker.no_such_param"), std::string::npos) << e;
+}
+
+// A free-space memory grid too large for its cell (200 m at 0.02 m: 10 000 cells per side, 800 MB) passes each
+// parameter's range but is refused at load, with the reason.
+TEST(PeopleTrackerComponent, RefusesAFreeSpaceMemoryGridTooLargeForItsCell) {
+  auto ctx = cairn::Context::create();
+  cairn::Executor exec;
+  cairn::ComponentLoader loader;
+  cairn::ComponentManager mgr(ctx, exec, "people_container", loader);
+  cairn::LoadRequest req{"cairn_people_tracking::PeopleTracker", "people_tracker"};
+  req.parameters["motion.memory_size"] = 200.0;
+  req.parameters["motion.memory_resolution"] = 0.02;
+  const auto loaded = mgr.load(req);
+  EXPECT_FALSE(loaded.ok);
+  EXPECT_NE(loaded.error.find("free-space memory (motion.memory_*)"), std::string::npos) << loaded.error;
+  req.parameters["motion.memory_resolution"] = 0.1;
+  const auto fine = mgr.load(req);
+  EXPECT_TRUE(fine.ok) << fine.error;
 }

@@ -542,7 +542,7 @@ TEST(FreeSpaceMemory, RemembersForMemorySecondsFollowsTheSensorAndForgetsWhenTim
   // Bad parameters.
   EXPECT_THROW(FreeSpaceMemory(0.0, 40.0, 0.15, 60.0, 2, 1.0), InputError);
   EXPECT_THROW(FreeSpaceMemory(0.1, 0.3, 0.15, 60.0, 2, 1.0), InputError);   // under 4 cells
-  EXPECT_THROW(FreeSpaceMemory(0.01, 1e3, 0.15, 60.0, 2, 1.0), InputError);  // over 20000 cells per side
+  EXPECT_THROW(FreeSpaceMemory(0.02, 100.0, 0.15, 60.0, 2, 1.0), InputError);  // over 4000 cells per side
   EXPECT_THROW(FreeSpaceMemory(0.1, 40.0, -0.1, 60.0, 2, 1.0), InputError);
   EXPECT_THROW(FreeSpaceMemory(0.1, 40.0, 0.15, -1.0, 2, 1.0), InputError);
   EXPECT_THROW(FreeSpaceMemory(0.1, 40.0, 0.15, 60.0, 0, 1.0), InputError);

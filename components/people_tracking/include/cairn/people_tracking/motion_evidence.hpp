@@ -74,8 +74,8 @@ struct MotionEvidenceParams {
 // alone, in the spirit of the free-space evidence of occupancy-grid mapping.
 class FreeSpaceMemory {
  public:
-  // Throws InputError unless resolution > 0, 4 * resolution <= size <= 20000 * resolution, margin >= 0, memory >= 0
-  // and min_free_scans >= 1.
+  // Throws InputError unless resolution > 0, 4 * resolution <= size <= 4000 * resolution, margin >= 0, memory >= 0,
+  // surface_gap >= 0 and min_free_scans >= 1.
   FreeSpaceMemory(double resolution, double size, double margin, double memory, std::size_t min_free_scans,
                   double surface_gap);
   // Marks the cells the scan saw free (sensor pose in the tracking frame). A stamp before the newest added clears
