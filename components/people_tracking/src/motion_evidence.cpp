@@ -143,7 +143,7 @@ void FreeSpaceMemory::add(const LaserScan& scan, const Pose2& sensor_pose) {
     double length;
     if (scan.valid(i)) {
       length = scan.ranges[i] - margin_;
-    } else if (std::isinf(scan.ranges[i]) && scan.ranges[i] > 0.0) {
+    } else if (scan.beyondRange(i)) {
       // No return within range_max: crossed up to it, or up to a neighbour's return (a dropout on a wall).
       length = scan.range_max - margin_;
       const std::size_t before = i > 0 ? i - 1 : (full_circle ? n - 1 : n);
@@ -254,7 +254,7 @@ bool MotionEvidence::freeIn(const Past& past, const Eigen::Vector2d& p) const {
     const auto b = static_cast<std::size_t>(k);
     if (s.valid(b)) {
       if (s.ranges[b] < behind) return false;
-    } else if (!(s.range_max >= behind) || std::isnan(s.ranges[b]) || s.ranges[b] < s.range_min) {
+    } else if (!(s.range_max >= behind) || !s.beyondRange(b)) {
       return false;  // no return: free only if the laser would have seen something there (not a NaN or a too-close echo)
     }
   }

@@ -347,8 +347,10 @@ TrackerStatus PeopleTracker::updateLegs(double stamp, const std::vector<LegDetec
 }
 
 // Negative information from the scan for tracks that got no leg: look at the beams within visibility_radius of
-// the predicted position. Most of them ending well before it: occluded. All of them passing behind it (or
-// without return): nobody is there. Otherwise something is there that was not detected as legs.
+// the predicted position. Most of them ending well before it (or too close to measure): occluded. All of them
+// passing behind it (or without return within a range_max that reaches behind it): nobody is there. Otherwise
+// something is there that was not detected as legs. NaN readings, and beams without return when the track is
+// beyond the laser's reach, say nothing.
 void PeopleTracker::classifyVisibility(const LaserScan& scan, const Pose2& sensor_pose) {
   const double rho = params_.visibility_radius;
   const long n = static_cast<long>(scan.ranges.size());
@@ -364,11 +366,22 @@ void PeopleTracker::classifyVisibility(const LaserScan& scan, const Pose2& senso
       const long lo = static_cast<long>(std::ceil((bearing - half - scan.angle_min) / scan.angle_increment));
       const long hi = static_cast<long>(std::floor((bearing + half - scan.angle_min) / scan.angle_increment));
       int front = 0, behind = 0, total = 0;
+      const bool reaches_behind = scan.range_max >= r + rho;
       for (long k = std::max(0L, lo); k <= std::min(n - 1, hi); ++k) {
-        ++total;
         const auto b = static_cast<std::size_t>(k);
-        if (!scan.valid(b) || scan.ranges[b] > r + rho) ++behind;
-        else if (scan.ranges[b] < r - rho) ++front;
+        const float range = scan.ranges[b];
+        if (scan.valid(b)) {
+          if (range > r + rho) ++behind;
+          else if (range < r - rho) ++front;
+        } else if (scan.beyondRange(b)) {
+          if (!reaches_behind) continue;
+          ++behind;
+        } else if (std::isnan(range)) {
+          continue;
+        } else {
+          ++front;  // below range_min (or -inf): something right in front of the sensor
+        }
+        ++total;
       }
       if (total >= 2) {
         if (2 * front >= total) vis = Visibility::kOccluded;

@@ -373,6 +373,8 @@ TEST(MotionEvidence, NoReturnIsFreeOnlyWithinRangeAndNanIsNoInformation) {
   EXPECT_FALSE(freeWith(4.0f, 2.0f, 5.0));   // one ends in front (occluded)
   const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
   EXPECT_TRUE(freeWith(4.0f, inf, 5.0));    // no return within 5 m: nothing was there
+  EXPECT_TRUE(freeWith(4.0f, 6.0f, 5.0));   // beyond range_max (drivers that send range_max + 1): the same
+  EXPECT_FALSE(freeWith(4.0f, -inf, 5.0));  // -inf: too close (REP 117), no information
   EXPECT_FALSE(freeWith(4.0f, inf, 3.1));   // no return, but the laser would not have seen 3 m + margin
   EXPECT_FALSE(freeWith(4.0f, nan, 5.0));   // NaN: no information
   EXPECT_FALSE(freeWith(4.0f, 0.05f, 5.0)); // below range_min: no information
@@ -572,6 +574,21 @@ TEST(FreeSpaceMemory, AMissingReturnOnAWallDoesNotCrossIt) {
     m.add(s, Pose2{});
   }
   EXPECT_TRUE(m.seenFree({4.0, 0.0}, 1.4));
+  // The same with a finite value beyond range_max (20 m) for "no return", as some drivers send; NaN (an erroneous
+  // reading) and values below range_min say nothing.
+  auto openedWith = [](float no_return) {
+    FreeSpaceMemory f(0.1, 40.0, 0.15, 60.0, 2, 1.0);
+    for (double t : {1.0, 1.1}) {
+      LaserScan s = roundRoom(t, 3.0f);
+      for (std::size_t i = 355; i <= 365; ++i) s.ranges[i] = no_return;
+      f.add(s, Pose2{});
+    }
+    return f.seenFree({4.0, 0.0}, 1.1);
+  };
+  EXPECT_TRUE(openedWith(21.0f));
+  EXPECT_FALSE(openedWith(std::numeric_limits<float>::quiet_NaN()));
+  EXPECT_FALSE(openedWith(0.01f));
+  EXPECT_FALSE(openedWith(-inf));
 }
 
 // The returns of walls and furniture legs, and the cells right behind a wall, are never free, also from a robot that

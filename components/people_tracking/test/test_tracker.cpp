@@ -5,6 +5,7 @@
 #include <limits>
 #include <random>
 #include <set>
+#include <string>
 #include <algorithm>
 
 #include "cairn/people_tracking/assignment.hpp"
@@ -333,6 +334,31 @@ TEST(Tracker, FreeSpaceHidesAndDeletesOccludedTracksCoast) {
     const LaserScan empty2 = scanOf(0.8, {});
     tracker.updateLegs(0.8, {}, Pose2{}, dp, &empty2);
     EXPECT_TRUE(tracker.tracks().empty());
+  }
+  // What the beams without a valid return say (REP 117): NaN (erroneous) nothing, so the track coasts; a return
+  // too close to measure, something in front of the person (occluded); no return when the laser reaches 0.3 m
+  // behind the track (visibility_radius), nobody there; when it does not reach that far, nothing.
+  {
+    auto visibilityWith = [&](float reading, double range_max) {
+      PeopleTracker tracker;
+      for (int k = 0; k <= 5; ++k) tracker.updateLegs(0.1 * k, legsAt(person), Pose2{}, dp, nullptr);
+      for (const double t : {0.6, 0.7, 0.8}) {
+        LaserScan s = scanOf(t, {});
+        s.range_max = range_max;
+        s.ranges.assign(s.ranges.size(), reading);
+        tracker.updateLegs(t, {}, Pose2{}, dp, &s);
+      }
+      return tracker.tracks().empty() ? std::string("deleted") : std::to_string(int(tracker.tracks()[0].visibility));
+    };
+    const float inf = std::numeric_limits<float>::infinity();
+    const auto unknown = std::to_string(int(Visibility::kUnknown)), occluded = std::to_string(int(Visibility::kOccluded));
+    EXPECT_EQ(visibilityWith(std::numeric_limits<float>::quiet_NaN(), 20.0), unknown);
+    EXPECT_EQ(visibilityWith(0.01f, 20.0), occluded);
+    EXPECT_EQ(visibilityWith(-inf, 20.0), occluded);
+    EXPECT_EQ(visibilityWith(inf, 20.0), "deleted");
+    EXPECT_EQ(visibilityWith(25.0f, 20.0), "deleted");  // beyond range_max: no return, as inf
+    EXPECT_EQ(visibilityWith(inf, 3.2), unknown);       // the person is at 3 m, the laser sees only to 3.2 m
+    EXPECT_EQ(visibilityWith(inf, 3.5), "deleted");
   }
   // Occluded: someone stands between sensor and person for 2.5 s; the track is published for
   // occluded_coast_time, survives delete_timeout, and keeps its id when the person reappears.

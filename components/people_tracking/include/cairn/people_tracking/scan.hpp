@@ -27,6 +27,9 @@ struct LaserScan {
 
   [[nodiscard]] double angle(std::size_t i) const { return angle_min + static_cast<double>(i) * angle_increment; }
   [[nodiscard]] bool valid(std::size_t i) const;
+  // Beam i saw nothing within range_max: +inf (REP 117) or a finite value beyond range_max (drivers that send
+  // range_max + 1). NaN (an erroneous reading) and values below range_min (too close, -inf) are not "nothing there".
+  [[nodiscard]] bool beyondRange(std::size_t i) const { return ranges[i] > range_max; }
   [[nodiscard]] Eigen::Vector2d point(std::size_t i) const;
 };
 
