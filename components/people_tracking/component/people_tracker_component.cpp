@@ -187,6 +187,7 @@ class PeopleTracker : public cairn::Node {
     tp.initial_velocity_sigma = declareRanged<double>("tracker.initial_velocity_sigma", tp.initial_velocity_sigma, "m/s, velocity std of a new track");
     tp.gate_chi2 = declareRanged<double>("tracker.gate_chi2", tp.gate_chi2, "chi-square gate (2 dof)");
     tp.confirm_hits = static_cast<int>(declareRanged<int64_t>("tracker.confirm_hits", tp.confirm_hits, "associated scans until confirmed"));
+    tp.confirm_score = declareRanged<double>("tracker.confirm_score", tp.confirm_score, "track score (log-likelihood ratio) until confirmed; 0 = hits only");
     tp.tentative_timeout = declareRanged<double>("tracker.tentative_timeout", tp.tentative_timeout, "s without update deletes a tentative track");
     tp.delete_timeout = declareRanged<double>("tracker.delete_timeout", tp.delete_timeout, "s without update deletes a confirmed track");
     tp.max_position_sigma = declareRanged<double>("tracker.max_position_sigma", tp.max_position_sigma, "m, deletion when the position std grows beyond");

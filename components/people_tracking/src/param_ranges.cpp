@@ -46,6 +46,7 @@ constexpr Entry kRanges[] = {
     {"tracker.initial_velocity_sigma", {1e-3, 10.0}},
     {"tracker.gate_chi2", {0.1, 100.0}},
     {"tracker.confirm_hits", {1.0, 100.0}},
+    {"tracker.confirm_score", {0.0, 100.0}},
     {"tracker.tentative_timeout", {0.0, 60.0}},
     {"tracker.delete_timeout", {0.0, 60.0}},
     {"tracker.max_position_sigma", {0.01, 100.0}},

@@ -35,6 +35,7 @@ void checkParams(const TrackerParams& p) {
       {"tracker.initial_velocity_sigma", p.initial_velocity_sigma},
       {"tracker.gate_chi2", p.gate_chi2},
       {"tracker.confirm_hits", p.confirm_hits},
+      {"tracker.confirm_score", p.confirm_score},
       {"tracker.tentative_timeout", p.tentative_timeout},
       {"tracker.delete_timeout", p.delete_timeout},
       {"tracker.max_position_sigma", p.max_position_sigma},
@@ -236,6 +237,13 @@ Innovation innovation(const Track& t, const PersonDetection& d) {
   in.d2 = in.nu.dot(in.S.ldlt().solve(in.nu));
   return in;
 }
+
+// Track score increment of an update (TrackerParams::confirm_score; Blackman & Popoli 1999 §6.2): the log of the
+// detection's likelihood under the track, P_D N(nu; 0, S), over its likelihood as clutter, beta.
+double scoreIncrement(const Innovation& in, const TrackerParams& p) {
+  return std::log(p.detection_probability / (2.0 * M_PI * p.clutter_density)) - 0.5 * std::log(in.S.determinant()) -
+         0.5 * in.d2;
+}
 }  // namespace
 
 TrackerStatus PeopleTracker::checkTime(double stamp) {
@@ -275,7 +283,11 @@ void PeopleTracker::associate(const std::vector<PersonDetection>& dets, std::vec
       t.free_space_scans = t.visibility == Visibility::kFreeSpace ? t.free_space_scans + 1 : 0;
       t.occluded_since_update = t.occluded_since_update && t.visibility == Visibility::kOccluded;
     }
-    if (updated_[i] && !t.confirmed && t.hits >= params_.confirm_hits) {
+    // A miss costs ln(1 - P_D), at most ln(1e-3): with P_D = 1 one miss would otherwise keep a track from ever being
+    // confirmed.
+    if (!updated_[i] && !t.confirmed) t.score += std::log(std::max(1.0 - params_.detection_probability, 1e-3));
+    if (updated_[i] && !t.confirmed && t.hits >= params_.confirm_hits &&
+        (params_.confirm_score <= 0.0 || t.score >= params_.confirm_score)) {
       t.confirmed = true;
       if (params_.reid_window > 0.0) reidentify(i);
     }
@@ -696,6 +708,7 @@ bool PeopleTracker::onStaticMap(const Eigen::Vector2d& p) const {
 }
 
 void PeopleTracker::applyUpdate(Track& t, const PersonDetection& d) {
+  if (!t.confirmed) t.score += scoreIncrement(innovation(t, d), params_);
   if (!immOn(params_)) {
     if (params_.adaptive_nis_threshold > 0.0) {
       const double w = params_.adaptive_nis_smoothing;
@@ -832,6 +845,7 @@ void PeopleTracker::associateJpda(const std::vector<PersonDetection>& dets, std:
       if (b0 > 0.5) continue;  // most likely missed: keep the prediction (deletion logic sees no update)
       // Combined update. The measurement covariance of the most likely detection stands in for all of them.
       const PersonDetection& d = dets[best_j];
+      if (!t.confirmed) t.score += scoreIncrement(innovation(t, d), params_);  // the most likely detection's
       const Eigen::Matrix2d S = t.covariance.topLeftCorner<2, 2>() + d.covariance;
       const Eigen::Matrix<double, 4, 2> K = t.covariance.leftCols<2>() * S.inverse();
       const Eigen::Matrix4d Pc = t.covariance - K * S * K.transpose();

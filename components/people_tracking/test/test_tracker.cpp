@@ -187,6 +187,64 @@ TEST(Tracker, InitiationConfirmationDeletion) {
   EXPECT_TRUE(tracker.tracks().empty());
 }
 
+// Track score (confirm_score): a tentative track gets a detection in each of three scans. A walker's detections keep
+// to a straight line; the other track's jump 0.3 m sideways from scan to scan (legs of two people taken in turn, or
+// clutter). Counting hits confirms both at the third scan; the track score confirms the walker there and the other
+// not (it needs detections that fit before it is published). A scan without a detection costs ln(1 - P_D): the
+// walker with one missed scan is confirmed one hit later.
+TEST(Tracker, TrackScoreConfirmsDetectionsThatKeepToAPathNotOnesThatJump) {
+  struct Outcome {
+    int hits = 0;
+    bool confirmed = false;
+    double score = 0.0;
+  };
+  auto run = [](double confirm_score, double jump, int scans, int missed_scan = -1, double clutter_density = 0.02,
+                double detection_probability = 0.9) {
+    TrackerParams p;
+    p.confirm_score = confirm_score;
+    p.clutter_density = clutter_density;
+    p.detection_probability = detection_probability;
+    PeopleTracker tracker(p);
+    for (int k = 0; k < scans; ++k) {
+      const Eigen::Vector2d at(2.0 + 0.1 * k, 1.0 + (k % 2 == 1 ? jump : 0.0));
+      std::vector<PersonDetection> d;
+      if (k != missed_scan) d.push_back(det(at, 0.1));
+      tracker.updateInFrame(0.1 * k, d);
+    }
+    Outcome o;
+    if (tracker.tracks().size() != 1u) return o;
+    o.hits = tracker.tracks()[0].hits;
+    o.confirmed = tracker.tracks()[0].confirmed;
+    o.score = tracker.tracks()[0].score;
+    return o;
+  };
+  const double wald = 9.0;
+  for (const double jump : {0.0, 0.3}) {
+    const Outcome by_hits = run(0.0, jump, 3);
+    ASSERT_EQ(by_hits.hits, 3) << "the jumping detections must stay inside the gate";
+    EXPECT_TRUE(by_hits.confirmed) << jump;
+    const Outcome by_score = run(wald, jump, 3);
+    ASSERT_EQ(by_score.hits, 3);
+    EXPECT_EQ(by_score.confirmed, jump == 0.0) << "score " << by_score.score;
+  }
+  const Outcome missed3 = run(wald, 0.0, 4, 1), missed4 = run(wald, 0.0, 5, 1);
+  ASSERT_EQ(missed3.hits, 3);
+  EXPECT_FALSE(missed3.confirmed) << "score " << missed3.score;
+  EXPECT_TRUE(missed4.confirmed) << "score " << missed4.score;
+  // P_D = 1 (a miss is impossible for a person): the miss costs ln(1e-3), not -inf, so the track is confirmed later.
+  const Outcome certain = run(wald, 0.0, 8, 1, 0.02, 1.0);
+  EXPECT_TRUE(std::isfinite(certain.score));
+  EXPECT_TRUE(certain.confirmed) << "score " << certain.score;
+  EXPECT_LT(missed3.score, run(wald, 0.0, 3).score);
+  // 0 = hits only, also when the score is negative (here: a clutter density that explains every detection better).
+  const Outcome negative = run(0.0, 0.3, 3, -1, 20.0);
+  ASSERT_LT(negative.score, 0.0);
+  EXPECT_TRUE(negative.confirmed);
+  TrackerParams bad;
+  bad.confirm_score = -1.0;
+  EXPECT_THROW(PeopleTracker{bad}, InputError);
+}
+
 TEST(Tracker, ResetsCleanlyOnTimeJumps) {
   PeopleTracker tracker;
   for (int k = 0; k < 5; ++k) EXPECT_FALSE(tracker.updateInFrame(10.0 + 0.1 * k, {det({1, 0})}).reset);

@@ -95,7 +95,7 @@ void usage() {
       "  bench --world auto|office|apartment|warehouse|WORLD.yaml --trajectories FILE [--robot-path FILE|circle:R]\n"
       "        [--trajectory-offset X,Y[,THETA]] [--static-map [--static-map-margin M] [--track-leg-confidence-with-map C]] [--seed N] [--duration S]\n"
       "        [--association gnn|jpda] [--pairing tracks|detector] [--model FILE] [--rate HZ] [--start S]\n"
-      "        [--reid-window S] [--reid-max-distance M] [--publish-coast S] [--split-scans K] [--joint-pairs NODES] [--confirm-hits N] [--single-leg-stride M]\n"
+      "        [--reid-window S] [--reid-max-distance M] [--publish-coast S] [--split-scans K] [--joint-pairs NODES] [--confirm-hits N] [--confirm-score L] [--single-leg-stride M]\n"
       "        [--min-leg-confidence C] [--single-leg-min-confidence C] [--track-leg-confidence C] [--beams N] [--smooth S] [--fix-id-swaps] [--dump DIR] [--json]\n"
       "        tracker tuning (README): [--process-noise Q] [--delete-timeout S] [--max-position-sigma M] [--leg-spread M]\n"
       "        [--leg-spread-lateral M] [--leg-gate CHI2] [--occluded-coast S] [--occluded-delete-timeout S]\n"

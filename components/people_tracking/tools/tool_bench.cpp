@@ -61,6 +61,7 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--adaptive-smoothing") p.tracker.adaptive_nis_smoothing = param(value(), "tracker.adaptive_nis_smoothing");
     else if (a == "--delete-timeout") p.tracker.delete_timeout = param(value(), "tracker.delete_timeout");
     else if (a == "--max-position-sigma") p.tracker.max_position_sigma = param(value(), "tracker.max_position_sigma");
+    else if (a == "--confirm-score") p.tracker.confirm_score = param(value(), "tracker.confirm_score");
     else if (a == "--confirm-hits") p.tracker.confirm_hits = static_cast<int>(integerParam(value(), "tracker.confirm_hits"));
     else if (a == "--oracle-detections") p.oracle_detections = true;
     else if (a == "--static-map") p.static_map = true;
