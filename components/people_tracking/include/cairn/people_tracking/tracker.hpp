@@ -35,10 +35,10 @@ struct TrackerParams {
   // ... and, if > 0, once its track score reaches this: the log-likelihood ratio "a person, not clutter" of its
   // detections since birth (Blackman & Popoli 1999 §6.2, a sequential probability ratio test): each update adds
   // ln(P_D / (2π sqrt|S| β)) − d²/2 (d² the innovation's Mahalanobis distance, S its covariance, P_D =
-  // detection_probability, β = clutter_density), each scan without one ln(1 − P_D). Detections that keep to a
-  // constant-velocity path confirm the track in confirm_hits scans; a track that took legs of two people, or
-  // clutter, needs more. Wald's threshold ln((1 − β_miss) / α): 8 is α ≈ 4e-4 false confirmations at 10 % missed
-  // people (our choice, measured on the bench against 0 / 9 / 10, docs/benchmarks.md "Track score"). 0 = hits only.
+  // detection_probability, β = clutter_density), each scan without one ln(1 − P_D) (at most ln 1e-3).
+  // Detections that keep to a constant-velocity path confirm the track in confirm_hits scans; a track that took
+  // legs of two people, or clutter, needs more. Wald's threshold ln((1 − β_miss) / α): 8 is α ≈ 4e-4 false confirmations at 10 % missed
+  // people (our choice, measured on the bench against 0 / 6 … 13, docs/benchmarks.md "Track score"). 0 = hits only.
   double confirm_score = 8.0;
   double tentative_timeout = 0.4;       // s without an update deletes a tentative track
   double delete_timeout = 1.5;          // s without an update deletes a confirmed track
