@@ -1,7 +1,10 @@
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <random>
 #include <string>
 
@@ -24,11 +27,30 @@ int configure_isolated_dds() {
     setenv("CAIRN_DOMAIN_ID", d, 1);
     return std::atoi(d);
   }
-  std::random_device rd;
-  std::mt19937 rng(rd() ^ static_cast<unsigned>(getpid()));
-  const int domain = 1 + static_cast<int>(rng() % 230);
+  const int domain = reserve_test_domain();
   setenv("CAIRN_DOMAIN_ID", std::to_string(domain).c_str(), 1);
   return domain;
+}
+
+int reserve_test_domain() {
+  // A random domain alone let two of ctest's parallel processes draw the same one now and then (1 in 230 per
+  // overlapping pair; two simulator tests then read each other's odometry and clock). Each process therefore
+  // holds an exclusive lock on a file per domain for its lifetime, starting at a random domain and taking the
+  // first one nobody holds.
+  std::random_device rd;
+  std::mt19937 rng(rd() ^ static_cast<unsigned>(getpid()));
+  const int start = static_cast<int>(rng() % 230);
+  std::error_code ec;
+  const std::filesystem::path dir = std::filesystem::temp_directory_path(ec);
+  for (int i = 0; i < 230 && !ec; ++i) {
+    const int domain = 1 + (start + i) % 230;
+    const std::string path = (dir / ("cairn_test_domain_" + std::to_string(domain) + ".lock")).string();
+    const int fd = open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+    if (fd < 0) break;  // no writable temporary directory: fall back to the random domain
+    if (flock(fd, LOCK_EX | LOCK_NB) == 0) return domain;  // fd stays open: the lock lasts as long as the process
+    close(fd);
+  }
+  return 1 + start;
 }
 
 }  // namespace cairn::testing

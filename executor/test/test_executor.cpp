@@ -1,10 +1,17 @@
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
 #include <thread>
 
 #include "cairn/executor.hpp"
 #include "cairn/node.hpp"
+#include "cairn/testing.hpp"
 
 using namespace std::chrono_literals;
 using cairn::CallbackGroup;
@@ -216,4 +223,25 @@ TEST(Executor, ANodeKeepsNoTimerThatCanNeverRunAgain) {
   held->reset();
   exec.spin_until([&] { return fired == 302; }, 5s);
   EXPECT_EQ(fired, 302) << "a held one-shot timer can be re-armed";
+}
+
+// The test main reserves this process's DDS domain (cairn/testing.hpp): the lock on its file is held, so no other
+// process -- and no second reservation in this one -- can take it; every reservation is another free domain.
+TEST(TestingMain, EachProcessHoldsItsDomainAndEachReservationIsAnotherOne) {
+  const int mine = std::atoi(std::getenv("CAIRN_DOMAIN_ID"));
+  ASSERT_GE(mine, 1);
+  ASSERT_LE(mine, 230);
+  const int a = cairn::testing::reserve_test_domain(), b = cairn::testing::reserve_test_domain();
+  for (const int d : {a, b}) {
+    EXPECT_GE(d, 1);
+    EXPECT_LE(d, 230);
+    EXPECT_NE(d, mine);
+  }
+  EXPECT_NE(a, b);
+  if (std::getenv("CAIRN_TEST_DOMAIN_ID")) GTEST_SKIP() << "domain forced by CAIRN_TEST_DOMAIN_ID: not reserved";
+  const auto path = std::filesystem::temp_directory_path() / ("cairn_test_domain_" + std::to_string(mine) + ".lock");
+  const int fd = open(path.c_str(), O_RDWR | O_CLOEXEC);
+  ASSERT_GE(fd, 0) << path;
+  EXPECT_NE(flock(fd, LOCK_EX | LOCK_NB), 0) << "the domain's lock is not held";
+  close(fd);
 }
