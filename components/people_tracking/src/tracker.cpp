@@ -238,8 +238,8 @@ Innovation innovation(const Track& t, const PersonDetection& d) {
   return in;
 }
 
-// Track score increment of an update (TrackerParams::confirm_score; Blackman & Popoli 1999 §6.2): the log of the
-// detection's likelihood under the track, P_D N(nu; 0, S), over its likelihood as clutter, beta.
+// The log-likelihood ratio of a detection taken by the track against clutter, ln(P_D N(nu; 0, S) / beta): the track
+// score's increment (TrackerParams::confirm_score; Blackman & Popoli 1999 §6.2) and the JPDA's event weight.
 double scoreIncrement(const Innovation& in, const TrackerParams& p) {
   return std::log(p.detection_probability / (2.0 * M_PI * p.clutter_density)) - 0.5 * std::log(in.S.determinant()) -
          0.5 * in.d2;
@@ -772,7 +772,6 @@ void PeopleTracker::associateJpda(const std::vector<PersonDetection>& dets, std:
       if (in_gate(i, j)) gated[i].push_back(j);
     }
   const double pd = params_.detection_probability;
-  const double lambda = std::max(1e-9, params_.clutter_density);
   std::vector<double> det_mass(nd, 0.0);
   for (const GatingCluster& cluster : gatingClusters(nt, nd, in_gate)) {
     const std::vector<std::size_t>& members = cluster.tracks;
@@ -789,14 +788,10 @@ void PeopleTracker::associateJpda(const std::vector<PersonDetection>& dets, std:
         if (std::find(members.begin(), members.end(), i) == members.end()) updated_[i] = keep[i];
       continue;
     }
-    // Likelihood of track i taking detection j relative to clutter: pd * N(nu; 0, S) / lambda.
+    // Likelihood of track i taking detection j relative to clutter: pd * N(nu; 0, S) / clutter density.
     std::vector<std::vector<double>> g(members.size());
     for (std::size_t m = 0; m < members.size(); ++m)
-      for (std::size_t j : gated[members[m]]) {
-        const Innovation& in = inn[members[m]][j];
-        const double norm = 2.0 * M_PI * std::sqrt(in.S.determinant());
-        g[m].push_back(pd * std::exp(-0.5 * in.d2) / norm / lambda);
-      }
+      for (std::size_t j : gated[members[m]]) g[m].push_back(std::exp(scoreIncrement(inn[members[m]][j], params_)));
     std::vector<std::vector<double>> beta(members.size());
     std::vector<double> beta0(members.size(), 0.0);
     for (std::size_t m = 0; m < members.size(); ++m) beta[m].assign(gated[members[m]].size(), 0.0);
@@ -845,7 +840,7 @@ void PeopleTracker::associateJpda(const std::vector<PersonDetection>& dets, std:
       if (b0 > 0.5) continue;  // most likely missed: keep the prediction (deletion logic sees no update)
       // Combined update. The measurement covariance of the most likely detection stands in for all of them.
       const PersonDetection& d = dets[best_j];
-      if (!t.confirmed) t.score += scoreIncrement(innovation(t, d), params_);  // the most likely detection's
+      if (!t.confirmed) t.score += scoreIncrement(inn[members[m]][best_j], params_);  // the most likely detection's
       const Eigen::Matrix2d S = t.covariance.topLeftCorner<2, 2>() + d.covariance;
       const Eigen::Matrix<double, 4, 2> K = t.covariance.leftCols<2>() * S.inverse();
       const Eigen::Matrix4d Pc = t.covariance - K * S * K.transpose();
