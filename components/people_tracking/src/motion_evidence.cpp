@@ -101,8 +101,7 @@ void FreeSpaceMemory::add(const LaserScan& scan, const Pose2& sensor_pose) {
   std::fill(near_now_.begin(), near_now_.end(), 0);
   std::fill(crossed_now_.begin(), crossed_now_.end(), 0);
   const std::size_t n = scan.ranges.size();
-  const double span = std::abs(scan.angle_increment) * static_cast<double>(n);
-  const bool full_circle = span >= 2.0 * M_PI - 1e-6;
+  const bool full_circle = scan.fullCircle();
   const Eigen::Matrix2d R = sensor_pose.rotation();
   auto nearReturn = [&](const Eigen::Vector2d& p) {
     const long c = cellIndex(p);
@@ -218,9 +217,7 @@ void MotionEvidence::add(const LaserScan& scan, const Pose2& sensor_pose) {
   memory_.add(scan, sensor_pose);
   if (params_.window <= 0.0) return;
   if (!history_.empty() && !(scan.stamp > history_.back().scan.stamp)) history_.clear();
-  const double span = std::abs(scan.angle_increment) * static_cast<double>(scan.ranges.size());
-  history_.push_back({scan, sensor_pose, std::cos(sensor_pose.theta), std::sin(sensor_pose.theta),
-                      span >= 2.0 * M_PI - 1e-6});
+  history_.push_back({scan, sensor_pose, std::cos(sensor_pose.theta), std::sin(sensor_pose.theta), scan.fullCircle()});
   // Keep what a query at the newest stamp can use (scans older than window before it are never consulted).
   while (history_.size() > params_.max_scans || history_.front().scan.stamp < scan.stamp - params_.window)
     history_.pop_front();

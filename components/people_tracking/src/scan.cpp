@@ -10,6 +10,10 @@ bool LaserScan::valid(std::size_t i) const {
   return std::isfinite(r) && r >= range_min && r <= range_max;
 }
 
+bool LaserScan::fullCircle() const {
+  return std::abs(angle_increment) * static_cast<double>(ranges.size()) >= 2.0 * M_PI - 1e-6;
+}
+
 Eigen::Vector2d LaserScan::point(std::size_t i) const {
   const double a = angle(i);
   const double r = ranges[i];

@@ -506,6 +506,10 @@ LaserScan roundRoom(double stamp, float range) {
 TEST(FreeSpaceMemory, RemembersForMemorySecondsFollowsTheSensorAndForgetsWhenTimeGoesBack) {
   FreeSpaceMemory m(0.1, 40.0, 0.15, 60.0, 2, 1.0);
   ASSERT_TRUE(m.enabled());
+  ASSERT_TRUE(roundRoom(1.0, 5.0f).fullCircle());  // 720 beams of 0.5 deg
+  LaserScan one_beam_short = roundRoom(1.0, 5.0f);
+  one_beam_short.ranges.resize(719);
+  ASSERT_FALSE(one_beam_short.fullCircle());
   m.add(roundRoom(1.0, 5.0f), Pose2{});
   EXPECT_FALSE(m.seenFree({2.0, 0.0}, 1.0));  // one scan is not enough (min_free_scans 2)
   m.add(roundRoom(1.1, 5.0f), Pose2{});

@@ -30,6 +30,8 @@ struct LaserScan {
   // Beam i saw nothing within range_max: +inf (REP 117) or a finite value beyond range_max (drivers that send
   // range_max + 1). NaN (an erroneous reading) and values below range_min (too close, -inf) are not "nothing there".
   [[nodiscard]] bool beyondRange(std::size_t i) const { return ranges[i] > range_max; }
+  // The beams cover the whole circle: the last beam's neighbour is the first.
+  [[nodiscard]] bool fullCircle() const;
   [[nodiscard]] Eigen::Vector2d point(std::size_t i) const;
 };
 
