@@ -63,9 +63,10 @@ struct MotionEvidenceParams {
 // wall seen at a grazing angle has returns decimetres apart and the beams graze the cells between them (the surface
 // rule); behind a door opening, a corridor wall's cells are crossed through the opening in the scans where a person
 // hides the wall's returns (the count); a box's corner seen at a grazing angle has a return in every other scan and
-// is crossed in the others (the place rule: the box's inside is never free). A beam without a return (+inf:
-// nothing within range_max) crosses up to range_max, or up to a neighbouring beam's return when it has one (a
-// single missing return on a wall must not cross the wall); NaN and returns below range_min give no information.
+// is crossed in the others (the place rule: the box's inside is never free). A beam without a return
+// (LaserScan::beyondRange: nothing within range_max) crosses up to range_max, or up to a neighbouring beam's return
+// when it has one (a single missing return on a wall must not cross the wall); NaN and returns below range_min give
+// no information.
 // Limits: a face of a wide object first seen from a new viewpoint, whose cells the beams grazing its corners crossed
 // before, can read as free until it has been seen as often; a person standing still longer than the place was
 // seen free before becomes background. The grid follows the sensor: when the sensor leaves the middle half, the
