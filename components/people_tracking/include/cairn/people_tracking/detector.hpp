@@ -74,8 +74,8 @@ struct DetectorParams {
   // (MotionEvidence::crossedBefore at the cluster's surface point: not the static background, which is never
   // crossed) update tracks from this score, as every cluster does with a static map (track_leg_confidence_with_map):
   // what the map gives, learned from the scans. Persons and new tracks keep min_leg_confidence. A value >=
-  // track_leg_confidence turns it off. 54 bench runs without a map: IDSW 351 -> 252 (the true map in its place: 246), FP +1.3 %, FN -12 %
-  // (docs/benchmarks.md "Free-space memory"). Our choice.
+  // track_leg_confidence turns it off. 54 bench runs without a map: IDSW 351 -> 252 (the true map in its place:
+  // 246), FP +1.3 %, FN -12 % (docs/benchmarks.md "Free-space memory"). Our choice.
   double crossed_track_leg_confidence = 0.0;
   double max_range = 10.0;             // m, clusters beyond are ignored
   // Clusters of fewer points than the classifier learned from (SegmentationParams{}.min_points, 3) closer than this
