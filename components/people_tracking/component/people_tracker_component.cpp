@@ -102,6 +102,7 @@ class PeopleTracker : public cairn::Node {
                                "; relative paths also searched in share/cairn_people_tracking/models", {}, {}, true});
     use_odom_ = declare_parameter<bool>("use_odom", true, D{"compensate robot motion with `odom` (tracks in its frame); false: tracks in the laser frame", {}, {}, true});
     odom_tolerance_ = declare_parameter<double>("odom_tolerance", 0.2, D{"s a scan may be newer/older than the odometry buffer (extrapolated with the twist)", 0.0, 2.0, true});
+    odom_queue_ = static_cast<int>(declare_parameter<int64_t>("odom_queue", 10, D{"scans that may wait for odometry lagging them by more than odom_tolerance (0: ignored at once)", 0.0, 1000.0, true}));
     base_frame_ = declare_parameter<std::string>("base_frame", "base_link", D{"robot frame of the odometry (child frame); the laser mount is looked up as TF base_frame <- scan frame_id", {}, {}, true});
     tf_timeout_ = declare_parameter<double>("tf_timeout", 1.0, D{"s of scans to wait for the base_frame <- laser TF before using sensor_x/y/yaw", 0.0, 60.0, true});
     mount_.x = declare_parameter<double>("sensor_x", 0.0, D{"fallback laser position in the base frame when no TF arrives within tf_timeout, m", -10.0, 10.0, true});
@@ -561,13 +562,16 @@ class PeopleTracker : public cairn::Node {
                      std::isfinite(tw.linear.x) ? tw.linear.x : 0.0, std::isfinite(tw.linear.y) ? tw.linear.y : 0.0,
                      std::isfinite(tw.angular.z) ? tw.angular.z : 0.0});
     while (odom_.size() > 2 && odom_.back().stamp - odom_.front().stamp > kOdomHistory) odom_.pop_front();
+    releaseHeldScans();
   }
 
   // Robot (base) pose in the odometry frame at time t: interpolated inside the buffer, extrapolated with the
-  // twist up to odom_tolerance beyond it.
-  std::optional<pt::Pose2> robotPoseAt(double t, std::string& why) const {
+  // twist up to odom_tolerance beyond it. `pending` (if given) is set when odometry still to come could cover t.
+  std::optional<pt::Pose2> robotPoseAt(double t, std::string& why, bool* pending = nullptr) const {
+    if (pending) *pending = false;
     if (odom_.empty()) {
       why = "no odometry received yet";
+      if (pending) *pending = true;
       return std::nullopt;
     }
     const auto& last = odom_.back();
@@ -575,6 +579,7 @@ class PeopleTracker : public cairn::Node {
       const double dt = t - last.stamp;
       if (dt > odom_tolerance_) {
         why = "odometry is " + std::to_string(dt) + " s older than the scan (odom_tolerance " + std::to_string(odom_tolerance_) + ")";
+        if (pending) *pending = true;
         return std::nullopt;
       }
       const double c = std::cos(last.pose.theta), s = std::sin(last.pose.theta);
@@ -631,24 +636,49 @@ class PeopleTracker : public cairn::Node {
       return;
     }
 
-    pt::Pose2 sensor = mount_;
     if (use_odom_ && !resolveMount(m.header.frame_id, scan.stamp)) {
       warn("scan_wait_tf", "scan at " + std::to_string(scan.stamp) + ": waiting for TF " + base_frame_ + " <- " +
                                m.header.frame_id + ", scan ignored");
       return;
     }
-    if (use_odom_) {
-      std::string why;
-      const auto robot = robotPoseAt(scan.stamp, why);
-      if (!robot) {
-        warn("scan_no_odom", "scan at " + std::to_string(scan.stamp) + ": " + why + ", scan ignored");
-        return;
-      }
-      sensor = *robot * mount_;
-      sensor.theta = wrapAngle(sensor.theta);
-    } else {
-      sensor = pt::Pose2{};  // tracking frame = laser frame
+    if (!use_odom_) {
+      processScan(m, std::move(scan), pt::Pose2{});  // tracking frame = laser frame
+      return;
     }
+    // Scans wait here for the odometry of their stamp (as a TF message filter does): scans and odometry arrive on
+    // different topics, and under load the odometry can lag the scans by more than odom_tolerance.
+    if (!held_.empty() && scan.stamp < held_.back().scan.stamp) {  // a restarted log: the waiting scans are stale
+      warn("scan_back", "scan at " + std::to_string(scan.stamp) + ": time went backwards, " +
+                            std::to_string(held_.size()) + " scan(s) waiting for odometry dropped");
+      held_.clear();
+    }
+    held_.push_back({m, std::move(scan)});
+    releaseHeldScans();
+  }
+
+  // Processes the held scans, oldest first, while the odometry covers them. A scan waits while the odometry is
+  // behind it (or has not arrived yet) and at most odom_queue scans wait: beyond that, or when the odometry can
+  // never cover it (older than the buffer), the oldest is dropped with the reason.
+  void releaseHeldScans() {
+    while (!held_.empty()) {
+      HeldScan& h = held_.front();
+      std::string why;
+      bool pending = false;
+      if (const auto robot = robotPoseAt(h.scan.stamp, why, &pending)) {
+        pt::Pose2 sensor = *robot * mount_;
+        sensor.theta = wrapAngle(sensor.theta);
+        const HeldScan next = std::move(h);
+        held_.pop_front();
+        processScan(next.msg, next.scan, sensor);
+        continue;
+      }
+      if (pending && held_.size() <= static_cast<std::size_t>(odom_queue_)) return;
+      warn("scan_no_odom", "scan at " + std::to_string(h.scan.stamp) + ": " + why + ", scan ignored");
+      held_.pop_front();
+    }
+  }
+
+  void processScan(const sensor_msgs::msg::LaserScan& m, pt::LaserScan scan, const pt::Pose2& sensor) {
     const std::string frame = use_odom_ ? odom_frame_ : m.header.frame_id;
 
     // The static map first: with it attached the detector passes weaker legs (track_leg_confidence_with_map).
@@ -772,6 +802,12 @@ class PeopleTracker : public cairn::Node {
 
   bool use_odom_ = true;
   double odom_tolerance_ = 0.2;
+  int odom_queue_ = 10;
+  struct HeldScan {
+    sensor_msgs::msg::LaserScan msg;
+    pt::LaserScan scan;  // validated, from msg
+  };
+  std::deque<HeldScan> held_;  // scans waiting for their odometry, oldest first (releaseHeldScans)
   pt::Pose2 mount_;
   std::string base_frame_;
   double tf_timeout_ = 1.0;

@@ -187,7 +187,7 @@ struct FallbackMountRig {
 
   // Loads the component (ASSERTs inside: call through ASSERT_NO_FATAL_FAILURE(rig.start(...))).
   void start(const std::string& container, const World& world, double tf_timeout_s,
-             const std::map<std::string, std::string>& extra = {}) {
+             const std::map<std::string, cairn::ParameterValue>& extra = {}) {
     tf_timeout = tf_timeout_s;
     mgr = std::make_unique<cairn::ComponentManager>(ctx, exec, container, loader);
     cairn::LoadRequest req{"cairn_people_tracking::PeopleTracker", "people_tracker"};
@@ -225,6 +225,9 @@ struct FallbackMountRig {
       auto odom = world.odomAt(k * dt);
       odom.header.stamp = stampOf(t);
       odom_pub->publish(odom);
+      // The odometry in the component's reader before the scan is sent: under CPU starvation the two topics are
+      // delivered independently, and a scan whose odometry lags by more than odom_tolerance is skipped.
+      odom_pub->wait_for_all_acked(5s);
       const sensor_msgs::msg::LaserScan msg = toMsg(s);
       {
         std::lock_guard l(heard.mu);
@@ -431,6 +434,56 @@ TEST(PeopleTrackerComponent, LaserMountFallsBackToParametersWhenNoTfArrives) {
   EXPECT_GE(matched, 13) << "person A not tracked at its odometry-frame position with the fallback mount";
 }
 
+// Odometry lagging the scans by more than odom_tolerance (0.2 s; here 4 scans = 0.27 s): the scans wait for it
+// (odom_queue) and are all processed as it arrives; with odom_queue 0 they are ignored as before.
+TEST(PeopleTrackerComponent, ScansWaitForOdometryThatLagsBehindThem) {
+  // processed: scans 5-29 answered; lagging: of them, scans 8-29, whose odometry is >= 0.27 s old when they arrive
+  // (scans 5-7 are within odom_tolerance of the odometry of scan 4, extrapolated).
+  auto run = [](int64_t queue, int& processed, int& lagging, int& matched) {
+    World world;
+    FallbackMountRig rig;
+    ASSERT_NO_FATAL_FAILURE(rig.start(queue > 0 ? "people_container9" : "people_container10", world, 0.0,
+                                      {{"odom_queue", queue}}));
+    const double dt = 1.0 / 15.0, t0 = 300.0;
+    rig.play(world, t0, 5, dt);  // odometry in step with the scans: tracking starts
+    constexpr int kLag = 4, kEnd = 30;
+    auto sendOdom = [&](int k) {
+      auto odom = world.odomAt(k * dt);
+      odom.header.stamp = stampOf(t0 + k * dt);
+      rig.odom_pub->publish(odom);
+    };
+    for (int k = 5; k < kEnd; ++k) {
+      pt::LaserScan s = world.scanAt(k * dt, dt);
+      s.stamp = t0 + k * dt;
+      rig.scan_pub->publish(toMsg(s));
+      std::this_thread::sleep_for(15ms);  // best-effort scans: do not outrun the reader's history
+      if (k - kLag >= 5) sendOdom(k - kLag);
+    }
+    for (int k = kEnd - kLag; k < kEnd; ++k) sendOdom(k);
+    waitFor([&] {
+      std::lock_guard l(rig.heard.mu);
+      return heardAt(rig.heard.tracks, t0 + (kEnd - 1) * dt) != nullptr;
+    }, 5s);
+    std::this_thread::sleep_for(200ms);
+    rig.stop();
+    std::lock_guard l(rig.heard.mu);
+    for (int k = 5; k < kEnd; ++k) {
+      const auto* msg = heardAt(rig.heard.tracks, t0 + k * dt);
+      if (!msg) continue;
+      ++processed;
+      if (k >= 8) ++lagging;
+      if (trackNear(*msg, world.personA(k * dt), 0.35)) ++matched;
+    }
+  };
+  int processed = 0, lagging = 0, matched = 0;
+  run(10, processed, lagging, matched);
+  EXPECT_EQ(processed, 25) << "every scan waits for its odometry and is processed";
+  EXPECT_GE(matched, 22) << "person A tracked at its odometry-frame position from the held scans";
+  int processed0 = 0, lagging0 = 0, matched0 = 0;
+  run(0, processed0, lagging0, matched0);
+  EXPECT_EQ(lagging0, 0) << "odom_queue 0: scans whose odometry lags beyond odom_tolerance are ignored";
+}
+
 TEST(PeopleTrackerComponent, MalformedScansAreSkippedAndTheComponentKeepsRunning) {
   auto ctx = cairn::Context::create();
   cairn::Executor exec;
@@ -530,8 +583,8 @@ TEST(PeopleTrackerComponent, StaticMapDropsLegsOnMappedCells) {
     World world;
     world.static_legs = posts;
     FallbackMountRig rig;
-    std::map<std::string, std::string> extra;
-    if (with_map) extra["static_map.topic"] = "map";
+    std::map<std::string, cairn::ParameterValue> extra;
+    if (with_map) extra["static_map.topic"] = std::string("map");
     ASSERT_NO_FATAL_FAILURE(rig.start(with_map ? "people_container5" : "people_container4", world, 0.2, extra));
     // The map's writer lives until the run ends: a latched sample goes with its writer, and under load the
     // component may match the writer before it has received the sample.
@@ -588,8 +641,8 @@ TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
   auto run = [&](bool with_fusion, int& on_hidden, int& on_a) {
     World world;
     FallbackMountRig rig;
-    std::map<std::string, std::string> extra;
-    if (with_fusion) extra["fusion.topic"] = "people/camera_detections";
+    std::map<std::string, cairn::ParameterValue> extra;
+    if (with_fusion) extra["fusion.topic"] = std::string("people/camera_detections");
     ASSERT_NO_FATAL_FAILURE(rig.start(with_fusion ? "people_container7" : "people_container6", world, 0.2, extra));
     auto cam_pub = rig.sim->create_publisher<pmsg::PersonDetections>("people/camera_detections", cairn::QoS{});
     if (with_fusion) {
@@ -613,6 +666,7 @@ TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
       bad.covariance = {0.04, 0.0, 0.0, -1.0};
       m.detections.push_back(bad);
       cam_pub->publish(m);
+      cam_pub->wait_for_all_acked(5s);  // in the component's reader before the scan (as the odometry in play())
     });
     rig.stop();
     Heard& heard = rig.heard;
