@@ -456,7 +456,7 @@ TEST(PeopleTrackerComponent, ScansWaitForOdometryThatLagsBehindThem) {
       pt::LaserScan s = world.scanAt(k * dt, dt);
       s.stamp = t0 + k * dt;
       rig.scan_pub->publish(toMsg(s));
-      std::this_thread::sleep_for(15ms);  // best-effort scans: do not outrun the reader's history
+      std::this_thread::sleep_for(30ms);  // best-effort scans (keep last 5): do not outrun the reader's history
       if (k - kLag >= 5) sendOdom(k - kLag);
     }
     for (int k = kEnd - kLag; k < kEnd; ++k) sendOdom(k);
