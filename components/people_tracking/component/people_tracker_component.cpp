@@ -667,9 +667,9 @@ class PeopleTracker : public cairn::Node {
       if (const auto robot = robotPoseAt(h.scan.stamp, why, &pending)) {
         pt::Pose2 sensor = *robot * mount_;
         sensor.theta = wrapAngle(sensor.theta);
-        const HeldScan next = std::move(h);
+        HeldScan next = std::move(h);
         held_.pop_front();
-        processScan(next.msg, next.scan, sensor);
+        processScan(next.msg, std::move(next.scan), sensor);
         continue;
       }
       if (pending && held_.size() <= static_cast<std::size_t>(odom_queue_)) return;

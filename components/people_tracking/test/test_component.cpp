@@ -225,8 +225,9 @@ struct FallbackMountRig {
       auto odom = world.odomAt(k * dt);
       odom.header.stamp = stampOf(t);
       odom_pub->publish(odom);
-      // The odometry in the component's reader before the scan is sent: under CPU starvation the two topics are
-      // delivered independently, and a scan whose odometry lags by more than odom_tolerance is skipped.
+      // The odometry in the component's reader before the scan is sent: the two topics are delivered
+      // independently, and under CPU starvation a scan could otherwise wait for its odometry (odom_queue) past
+      // the reply timeout below.
       odom_pub->wait_for_all_acked(5s);
       const sensor_msgs::msg::LaserScan msg = toMsg(s);
       {
