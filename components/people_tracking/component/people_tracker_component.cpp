@@ -204,6 +204,7 @@ class PeopleTracker : public cairn::Node {
     tp.leg_spread_lateral_sigma = declareRanged<double>("tracker.leg_spread_lateral_sigma", tp.leg_spread_lateral_sigma, "m, leg spread across the walking direction");
     tp.leg_spread_min_speed = declareRanged<double>("tracker.leg_spread_min_speed", tp.leg_spread_min_speed, "m/s, slower tracks use an isotropic leg spread");
     tp.leg_gate_chi2 = declareRanged<double>("tracker.leg_gate_chi2", tp.leg_gate_chi2, "chi-square gate (2 dof) of a leg around a track");
+    tp.confidence_cost = declareRanged<double>("tracker.confidence_cost", tp.confidence_cost, "leg cost added per unit of missing track confidence (0 = off)");
     tp.reid_window = declareRanged<double>("tracker.reid_window", tp.reid_window, "s, deleted tracks can give their id to a new track this long (0: off)");
     tp.reid_gate_chi2 = declareRanged<double>("tracker.reid_gate_chi2", tp.reid_gate_chi2, "chi-square gate (2 dof) of re-identification");
     tp.reid_max_distance = declareRanged<double>("tracker.reid_max_distance", tp.reid_max_distance, "m, re-identification also needs the new track this close to the deleted track's prediction");

@@ -62,6 +62,7 @@ constexpr Entry kRanges[] = {
     {"tracker.leg_spread_lateral_sigma", {0.01, 2.0}},
     {"tracker.leg_spread_min_speed", {0.0, 10.0}},
     {"tracker.leg_gate_chi2", {0.1, 100.0}},
+    {"tracker.confidence_cost", {0.0, 100.0}},
     {"tracker.reid_window", {0.0, 60.0}},
     {"tracker.reid_gate_chi2", {0.1, 100.0}},
     {"tracker.reid_max_distance", {0.0, 1000.0}},

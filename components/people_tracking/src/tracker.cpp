@@ -47,6 +47,7 @@ void checkParams(const TrackerParams& p) {
       {"tracker.jpda_max_events", p.jpda_max_events},
       {"tracker.min_detection_confidence", p.min_detection_confidence},
       {"tracker.confidence_gain", p.confidence_gain},
+      {"tracker.confidence_cost", p.confidence_cost},
       {"tracker.leg_spread_sigma", p.leg_spread_sigma},
       {"tracker.leg_spread_lateral_sigma", p.leg_spread_lateral_sigma},
       {"tracker.leg_spread_min_speed", p.leg_spread_min_speed},
@@ -434,8 +435,9 @@ std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<Leg
       const Eigen::Matrix2d Si = S.inverse();
       // Negative log-likelihood: the log-determinant keeps uncertain (coasting) tracks from taking legs that a
       // well-localised neighbour explains. "No leg" costs the gate plus the log-determinant of a perfectly
-      // localised track, the same for every track (a per-row constant would not change the assignment).
-      const double log_det = std::log(S.determinant());
+      // localised track, the same for every track (a per-row constant would not change the assignment). A track
+      // that missed its legs lately pays confidence_cost * (1 - confidence) more per leg.
+      const double log_det = std::log(S.determinant()) + params_.confidence_cost * (1.0 - t.confidence);
       for (std::size_t c = 0; c < cols.size(); ++c) {
         const Eigen::Vector2d nu = legs[cols[c]].position - t.position();
         const double d2 = nu.dot(Si * nu);

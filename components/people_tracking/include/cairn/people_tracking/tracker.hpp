@@ -58,6 +58,12 @@ struct TrackerParams {
   // are paired closest-first into new person hypotheses.
   double leg_spread_sigma = 0.20;  // m, std of a leg centre around the body centre (hip offset + stride)
   double leg_gate_chi2 = 9.21;     // 99 % gate, 2 dof
+  // A track's recent detection record in the leg cost (updateLegs): a leg costs confidence_cost * (1 - confidence)
+  // more for a track whose confidence (the moving average of its associations, confidence_gain) is low, i.e. whose
+  // person has been missing in the last scans — usually hidden behind someone, whose legs its gate then reaches.
+  // A prior on whether the track gets a leg now, like a per-track detection probability (our choice; the linear
+  // form and the value are measured, docs/benchmarks.md "Track confidence in the leg cost"). 0 disables.
+  double confidence_cost = 2.0;
   // Legs swing along the walking direction but stay at the hip width across it: for a track moving faster than
   // leg_spread_min_speed the spread is leg_spread_sigma along the velocity and leg_spread_lateral_sigma across it,
   // so a coasting track does not reach sideways into the legs of someone walking next to it.
