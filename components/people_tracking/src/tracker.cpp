@@ -541,7 +541,8 @@ void PeopleTracker::jointPairs(const std::vector<LegDetection>& legs, const Dete
       const Eigen::Matrix2d G = legCovariance(t, pairing);
       const Eigen::Matrix2d M = t.positionCovariance() + 0.5 * G, Sep = 2.0 * G;
       const Eigen::Matrix2d Mi = M.inverse(), Sepi = Sep.inverse();
-      const double log_dets = std::log(M.determinant()) + std::log(Sep.determinant());
+      const double log_dets = std::log(M.determinant()) + std::log(Sep.determinant()) +
+                              2.0 * params_.confidence_cost * (1.0 - t.confidence);  // per leg, as in `cost`
       std::vector<Option>& o = options[k];
       o.push_back({2.0 * no_leg, -1, -1});
       for (std::size_t i = 0; i < lg.size(); ++i) {
