@@ -436,14 +436,14 @@ std::vector<PersonDetection> PeopleTracker::pairWithTracks(const std::vector<Leg
       // Negative log-likelihood: the log-determinant keeps uncertain (coasting) tracks from taking legs that a
       // well-localised neighbour explains. "No leg" costs the gate plus the log-determinant of a perfectly
       // localised track, the same for every track (a per-row constant would not change the assignment). A track
-      // that missed its legs lately pays confidence_cost * (1 - confidence) more per leg.
-      const double log_det = std::log(S.determinant()) + params_.confidence_cost * (1.0 - t.confidence);
+      // that missed its legs lately pays legConfidenceCost more per leg.
+      const double per_leg = std::log(S.determinant()) + legConfidenceCost(t);
       for (std::size_t c = 0; c < cols.size(); ++c) {
         const Eigen::Vector2d nu = legs[cols[c]].position - t.position();
         const double d2 = nu.dot(Si * nu);
         if (d2 > params_.leg_gate_chi2) continue;
-        cost(static_cast<long>(2 * r), static_cast<long>(c)) = d2 + log_det;
-        cost(static_cast<long>(2 * r + 1), static_cast<long>(c)) = d2 + log_det;
+        cost(static_cast<long>(2 * r), static_cast<long>(c)) = d2 + per_leg;
+        cost(static_cast<long>(2 * r + 1), static_cast<long>(c)) = d2 + per_leg;
       }
       for (long k = 0; k < 2; ++k)
         cost(static_cast<long>(2 * r) + k, nc + static_cast<long>(2 * r) + k) = params_.leg_gate_chi2 + log_det0;
@@ -541,8 +541,8 @@ void PeopleTracker::jointPairs(const std::vector<LegDetection>& legs, const Dete
       const Eigen::Matrix2d G = legCovariance(t, pairing);
       const Eigen::Matrix2d M = t.positionCovariance() + 0.5 * G, Sep = 2.0 * G;
       const Eigen::Matrix2d Mi = M.inverse(), Sepi = Sep.inverse();
-      const double log_dets = std::log(M.determinant()) + std::log(Sep.determinant()) +
-                              2.0 * params_.confidence_cost * (1.0 - t.confidence);  // per leg, as in `cost`
+      const double log_dets =
+          std::log(M.determinant()) + std::log(Sep.determinant()) + 2.0 * legConfidenceCost(t);  // two legs
       std::vector<Option>& o = options[k];
       o.push_back({2.0 * no_leg, -1, -1});
       for (std::size_t i = 0; i < lg.size(); ++i) {
@@ -663,6 +663,10 @@ void PeopleTracker::predict(double stamp) {
 
 Eigen::Matrix2d PeopleTracker::legCovariance(const Track& t, const DetectorParams& pairing) const {
   return legSpread(t) + pairing.sigma_pair * pairing.sigma_pair * Eigen::Matrix2d::Identity();
+}
+
+double PeopleTracker::legConfidenceCost(const Track& t) const {
+  return params_.confidence_cost * (1.0 - t.confidence);
 }
 
 Eigen::Matrix2d PeopleTracker::legSpread(const Track& t) const {

@@ -215,6 +215,8 @@ class PeopleTracker {
   Eigen::Matrix2d legSpread(const Track& t) const;
   // A leg's position about the track's centre: the gait spread plus the detector's pair noise (G in jointPairs).
   Eigen::Matrix2d legCovariance(const Track& t, const DetectorParams& pairing) const;
+  // What a leg costs a track on top of its likelihood (TrackerParams::confidence_cost), per leg.
+  [[nodiscard]] double legConfidenceCost(const Track& t) const;
   void jointPairs(const std::vector<LegDetection>& legs, const DetectorParams& pairing, const Eigen::MatrixXd& cost,
                   const std::vector<std::size_t>& rows, const std::vector<std::size_t>& cols, std::vector<int>& match) const;
   void reidentify(std::size_t new_track);
