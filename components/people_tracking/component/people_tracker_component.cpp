@@ -221,7 +221,8 @@ class PeopleTracker : public cairn::Node {
     static_map_threshold_ = static_cast<int>(declare_parameter<int64_t>("static_map.occupied_threshold", 65, D{"cell value (0-100) from which a cell is occupied", 1.0, 100.0, true}));
     // Other detection sources (Stüde §2.1.3; PeopleTracker::updateLegs `others`).
     fusion_topic_ = declare_parameter<std::string>("fusion.topic", "", D{"PersonDetections of another source (a camera detector, a second laser) fused with the legs; empty = off", {}, {}, true});
-    fusion_max_age_ = declare_parameter<double>("fusion.max_age", fusion_max_age_, D{"s, a message is used by the first scan within this time of its stamp, once", 0.0, 5.0, true});
+    fusion_max_age_ = declare_parameter<double>("fusion.max_age", fusion_max_age_, D{"s, a scan uses the message nearest its stamp within this time, once", 0.0, 5.0, true});
+    fusion_wait_ = declare_parameter<double>("fusion.wait", fusion_wait_, D{"s (scan time), how long a scan waits for messages of fusion.topic lagging behind it (0: never waits)", 0.0, 5.0, true});
     tp.fusion.max_pair_distance = declareRanged<double>("fusion.max_pair_distance", tp.fusion.max_pair_distance, "m, farther detections are not fused with a person from legs");
     tp.fusion.gate_chi2 = declareRanged<double>("fusion.gate_chi2", tp.fusion.gate_chi2, "Mahalanobis gate of a pair (0: Euclidean nearest pairs, as in the thesis)");
 
@@ -411,7 +412,7 @@ class PeopleTracker : public cairn::Node {
     }
   }
 
-  // Detections of another source: checked and kept (the newest message only) until a scan uses them.
+  // Detections of another source: checked and queued by stamp until a scan uses them (takeOtherDetections).
   void onOtherDetections(const pmsg::PersonDetections& m) {
     const double stamp = to_seconds(m.header.stamp);
     if (!std::isfinite(stamp) || m.header.frame_id.empty()) {
@@ -442,24 +443,51 @@ class PeopleTracker : public cairn::Node {
       warn("fusion_invalid", "'" + fusion_topic_ + "': " + std::to_string(bad) + " of " +
                                  std::to_string(m.detections.size()) +
                                  " detections with a non-finite position or a covariance that is not symmetric positive definite, skipped");
-    other_ = std::move(o);
+    if (others_newest_ && o.stamp < *others_newest_) {  // a restarted source: the queued ones are stale
+      warn("fusion_back", "'" + fusion_topic_ + "': time went backwards, " + std::to_string(others_.size()) +
+                              " queued message(s) dropped");
+      others_.clear();
+    }
+    others_newest_ = o.stamp;
+    others_.push_back(std::move(o));
+    if (others_.size() > kMaxQueuedOthers) others_.pop_front();  // no scans for a while: keep the newest
+    releaseHeldScans();  // a scan may have been waiting for this message
   }
 
-  // The kept detections of another source for the scan at `stamp`, in the tracking frame (`frame`): used once,
-  // when their stamp is within fusion.max_age of the scan's. Their frame is the tracking frame, the robot's base
+  // Whether the scan at `stamp` may be processed as far as the other source is concerned. Messages of one topic
+  // arrive in order, so once one at or after the scan's stamp is in, every message that could pair with the scan
+  // is. Until then the scan waits (as in an approximate-time message filter), but only for a source that is
+  // lagging, not for one that fell silent: never longer than fusion.wait of scan time (newer scans arriving), and
+  // not at all when the newest message is already more than fusion.wait behind the scan or none has come yet.
+  [[nodiscard]] bool otherSourceCaughtUp(double stamp, double newest_scan) const {
+    if (fusion_topic_.empty() || fusion_wait_ <= 0.0 || !others_newest_) return true;
+    const double newest = *others_newest_;
+    return newest >= stamp || newest < stamp - fusion_wait_ || newest_scan - stamp >= fusion_wait_;
+  }
+
+  // The queued detections of another source for the scan at `stamp`, in the tracking frame (`frame`): the message
+  // nearest the scan among those within fusion.max_age of its stamp, used once; the older ones are dropped (a source
+  // faster than the laser), the newer ones wait for later scans. Their frame is the tracking frame, the robot's base
   // frame, the scan's frame or any frame with a TF to the base frame; the robot pose is the odometry at their stamp.
   // Approximation: people move up to max_age * 1.5 m/s between the two stamps; nothing compensates that.
   std::vector<pt::PersonDetection> takeOtherDetections(double stamp, const std::string& scan_frame,
                                                        const std::string& tracking_frame) {
-    if (!other_) return {};
-    if (other_->stamp > stamp + fusion_max_age_) return {};  // for a later scan
-    const OtherDetections o = std::move(*other_);
-    other_.reset();
-    if (o.stamp < stamp - fusion_max_age_) {
-      warn("fusion_stale", "'" + fusion_topic_ + "': detections " + std::to_string(stamp - o.stamp) +
-                               " s older than the scan (fusion.max_age " + std::to_string(fusion_max_age_) + "), dropped");
+    std::optional<std::size_t> best;
+    for (std::size_t i = 0; i < others_.size() && others_[i].stamp <= stamp + fusion_max_age_; ++i)
+      if (std::abs(others_[i].stamp - stamp) <= fusion_max_age_ &&
+          (!best || std::abs(others_[i].stamp - stamp) < std::abs(others_[*best].stamp - stamp)))
+        best = i;
+    if (!best) {
+      std::size_t stale = 0;
+      while (!others_.empty() && others_.front().stamp < stamp - fusion_max_age_) others_.pop_front(), ++stale;
+      if (stale > 0)
+        warn("fusion_stale", "'" + fusion_topic_ + "': " + std::to_string(stale) + " message(s) more than fusion.max_age (" +
+                                 std::to_string(fusion_max_age_) + " s) older than the scan at " + std::to_string(stamp) +
+                                 " and none within it, dropped");
       return {};
     }
+    const OtherDetections o = std::move(others_[*best]);
+    others_.erase(others_.begin(), others_.begin() + static_cast<long>(*best) + 1);
     if (o.frame == tracking_frame) return o.detections;
     if (!use_odom_) {  // tracking in the laser frame: nothing else to transform with
       warn("fusion_frame", "'" + fusion_topic_ + "': frame '" + o.frame + "' is not the tracking frame '" +
@@ -642,15 +670,11 @@ class PeopleTracker : public cairn::Node {
                                m.header.frame_id + ", scan ignored");
       return;
     }
-    if (!use_odom_) {
-      processScan(m, std::move(scan), pt::Pose2{});  // tracking frame = laser frame
-      return;
-    }
-    // Scans wait here for the odometry of their stamp (as a TF message filter does): scans and odometry arrive on
-    // different topics, and under load the odometry can lag the scans by more than odom_tolerance.
+    // Scans wait here for the odometry of their stamp (as a TF message filter does) and for a lagging other
+    // detection source (fusion.topic): these arrive on different topics, and under load they can lag the scans.
     if (!held_.empty() && scan.stamp < held_.back().scan.stamp) {  // a restarted log: the waiting scans are stale
       warn("scan_back", "scan at " + std::to_string(scan.stamp) + ": time went backwards, " +
-                            std::to_string(held_.size()) + " scan(s) waiting for odometry dropped");
+                            std::to_string(held_.size()) + " waiting scan(s) dropped");
       held_.clear();
     }
     held_.push_back({m, std::move(scan)});
@@ -659,10 +683,18 @@ class PeopleTracker : public cairn::Node {
 
   // Processes the held scans, oldest first, while the odometry covers them. A scan waits while the odometry is
   // behind it (or has not arrived yet) and at most odom_queue scans wait: beyond that, or when the odometry can
-  // never cover it (older than the buffer), the oldest is dropped with the reason.
+  // never cover it (older than the buffer), the oldest is dropped with the reason. It also waits for a lagging
+  // other source (otherSourceCaughtUp), and is then processed without it at the latest after fusion.wait.
   void releaseHeldScans() {
     while (!held_.empty()) {
       HeldScan& h = held_.front();
+      if (!otherSourceCaughtUp(h.scan.stamp, held_.back().scan.stamp) && held_.size() < kMaxHeldScans) return;
+      if (!use_odom_) {  // tracking frame = laser frame
+        HeldScan next = std::move(h);
+        held_.pop_front();
+        processScan(next.msg, std::move(next.scan), pt::Pose2{});
+        continue;
+      }
       std::string why;
       bool pending = false;
       if (const auto robot = robotPoseAt(h.scan.stamp, why, &pending)) {
@@ -808,7 +840,8 @@ class PeopleTracker : public cairn::Node {
     sensor_msgs::msg::LaserScan msg;
     pt::LaserScan scan;  // validated, from msg
   };
-  std::deque<HeldScan> held_;  // scans waiting for their odometry, oldest first (releaseHeldScans)
+  std::deque<HeldScan> held_;  // scans waiting for their odometry or other source, oldest first (releaseHeldScans)
+  static constexpr std::size_t kMaxHeldScans = 1000;  // bounds fusion.wait's queue for any scan rate
   pt::Pose2 mount_;
   std::string base_frame_;
   double tf_timeout_ = 1.0;
@@ -819,7 +852,10 @@ class PeopleTracker : public cairn::Node {
   int static_map_threshold_ = 65;
   std::string fusion_topic_;
   double fusion_max_age_ = 0.15;
-  std::optional<OtherDetections> other_;  // the newest message of fusion.topic not yet used by a scan
+  double fusion_wait_ = 0.5;
+  std::deque<OtherDetections> others_;  // messages of fusion.topic not yet used or dropped, by stamp
+  std::optional<double> others_newest_;  // stamp of the newest message of fusion.topic received
+  static constexpr std::size_t kMaxQueuedOthers = 200;
   std::shared_ptr<pt::StaticMap> static_map_;  // shared with the tracker; its map_from_tracking is set per scan
   pt::Pose2 grid_from_map_{};
   std::string map_frame_;

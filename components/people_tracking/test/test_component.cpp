@@ -216,7 +216,11 @@ struct FallbackMountRig {
   }
   // Scans and odometry of `world` at t0 + k dt (k < steps), each after the reply to the previous one (reliable
   // and in order); scans within the TF timeout get no reply, so their wait is short.
-  void play(World& world, double t0, int steps, double dt, const std::function<void(int k, double t)>& before_scan = {}) {
+  // answered_through(k): the newest scan whose tracks are expected once scan k is sent (default k; fewer when
+  // scans wait for a lagging input). The next scan is sent after that reply, or after one scan period when no new
+  // reply is due: the scan topic is best effort, and a burst of scans can lose some.
+  void play(World& world, double t0, int steps, double dt, const std::function<void(int k, double t)>& before_scan = {},
+            const std::function<int(int k)>& answered_through = {}) {
     for (int k = 0; k < steps; ++k) {
       const double t = t0 + k * dt;
       if (before_scan) before_scan(k, t);
@@ -235,10 +239,16 @@ struct FallbackMountRig {
         sent[key(msg.header.stamp)] = msg;
       }
       scan_pub->publish(msg);
+      const int j = answered_through ? answered_through(k) : k;
+      if (j < 0) continue;
+      if (answered_through && k > 0 && j == answered_through(k - 1)) {
+        std::this_thread::sleep_for(std::chrono::duration<double>(dt));
+        continue;
+      }
       waitFor([&] {
         std::lock_guard l(heard.mu);
-        return heardAt(heard.tracks, t) != nullptr;
-      }, k * dt < tf_timeout + 0.1 ? 200ms : 5s);
+        return heardAt(heard.tracks, t0 + j * dt) != nullptr;
+      }, j * dt < tf_timeout + 0.1 ? 200ms : 5s);
     }
   }
   // Stops both executors: afterwards `heard` no longer changes.
@@ -639,21 +649,33 @@ TEST(PeopleTrackerComponent, StaticMapDropsLegsOnMappedCells) {
 // not rendered) is tracked from them alone, at its odometry-frame position. Without the parameter: no track.
 TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
   const Eigen::Vector2d hidden(3.0, -3.0);  // odometry frame
-  auto run = [&](bool with_fusion, int& on_hidden, int& on_a) {
+  const double dt = 1.0 / 15.0;
+  constexpr int steps = 45;
+  // lag: the other source's message for scan k is sent with scan k + lag (a camera pipeline slower than the laser,
+  // or its messages reaching the executor late under load); wait: fusion.wait (< 0: the default); silent_from: the
+  // source sends nothing for scans from this one on (-1: never). Counts, over scans 15-44: scans answered, tracks on the
+  // other source's person, tracks on person A.
+  struct Counts {
+    int answered = 0, on_hidden = 0, on_a = 0;
+  };
+  auto run = [&](const std::string& container, bool with_fusion, int lag, double wait, int silent_from = -1) {
+    Counts c;
+    if (silent_from < 0) silent_from = steps;
     World world;
     FallbackMountRig rig;
     std::map<std::string, cairn::ParameterValue> extra;
     if (with_fusion) extra["fusion.topic"] = std::string("people/camera_detections");
-    ASSERT_NO_FATAL_FAILURE(rig.start(with_fusion ? "people_container7" : "people_container6", world, 0.2, extra));
+    if (wait >= 0.0) extra["fusion.wait"] = wait;
+    rig.start(container, world, 0.2, extra);
+    if (::testing::Test::HasFatalFailure()) return c;
     auto cam_pub = rig.sim->create_publisher<pmsg::PersonDetections>("people/camera_detections", cairn::QoS{});
-    if (with_fusion) {
-      ASSERT_TRUE(waitFor([&] { return cam_pub->inter_process_subscription_count() > 0; }, 20s));
+    if (with_fusion && !waitFor([&] { return cam_pub->inter_process_subscription_count() > 0; }, 20s)) {
+      ADD_FAILURE() << container << ": the component did not subscribe to the other source";
+      return c;
     }
-    const double dt = 1.0 / 15.0;
-    const int steps = 45;
-    rig.play(world, 400.0, steps, dt, [&](int k, double t) {
+    auto send = [&](int k) {
       pmsg::PersonDetections m;
-      m.header.stamp = stampOf(t);
+      m.header.stamp = stampOf(400.0 + k * dt);
       m.header.frame_id = "base_footprint";
       pmsg::PersonDetection d;
       const Eigen::Vector2d p = world.robot(k * dt).inverseTransform(hidden);
@@ -668,24 +690,63 @@ TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
       m.detections.push_back(bad);
       cam_pub->publish(m);
       cam_pub->wait_for_all_acked(5s);  // in the component's reader before the scan (as the odometry in play())
-    });
+    };
+    const bool waits = lag > 0 && wait != 0.0;
+    // Which scans are answered once scan k is sent: a scan waits for its own message (sent with scan k + lag).
+    // After the source falls silent a scan waits until it is fusion.wait (0.5 s, 7.5 scans) behind the newest
+    // one, and not at all once the newest message is more than fusion.wait behind it.
+    auto answered_through = [&](int k) {
+      if (!waits) return k;
+      if (k < silent_from + lag) return k - lag;
+      const int last_message = silent_from - 1;
+      const int first_unheld = last_message + 8;  // 8 scans (0.53 s) after the last message: it does not wait
+      // Scans before it wait 8 scans each; the last of them goes with scan first_unheld + 7, and the rest at once.
+      return k >= first_unheld + 7 ? k : std::max(last_message, k - 8);
+    };
+    rig.play(world, 400.0, steps, dt, [&](int k, double) { if (k >= lag && k - lag < silent_from) send(k - lag); },
+             answered_through);
+    // The source catches up: the waiting scans go through.
+    for (int k = steps - lag; k < std::min(steps, silent_from); ++k) send(k);
+    if (lag > 0) {
+      waitFor([&] {
+        std::lock_guard l(rig.heard.mu);
+        return heardAt(rig.heard.tracks, 400.0 + (steps - 1) * dt) != nullptr;
+      }, waits ? 5s : 500ms);
+    }
     rig.stop();
     Heard& heard = rig.heard;
     std::lock_guard l(heard.mu);
     for (int k = 15; k < steps; ++k) {
       const auto* msg = heardAt(heard.tracks, 400.0 + k * dt);
       if (!msg) continue;
-      if (trackNear(*msg, hidden, 0.3)) ++on_hidden;
-      if (trackNear(*msg, world.personA(k * dt), 0.35)) ++on_a;
+      ++c.answered;
+      if (trackNear(*msg, hidden, 0.3)) ++c.on_hidden;
+      if (trackNear(*msg, world.personA(k * dt), 0.35)) ++c.on_a;
     }
+    return c;
   };
-  int hidden_without = 0, a_without = 0, hidden_with = 0, a_with = 0;
-  run(false, hidden_without, a_without);
-  run(true, hidden_with, a_with);
-  EXPECT_EQ(hidden_without, 0) << "nothing on the laser is there";
-  EXPECT_GE(hidden_with, 25) << "the other source's person must be tracked at its odometry-frame position";
-  EXPECT_GE(a_without, 25);
-  EXPECT_GE(a_with, 25);
+  const Counts without = run("people_container6", false, 0, -1.0);
+  const Counts with = run("people_container7", true, 0, -1.0);
+  EXPECT_EQ(without.on_hidden, 0) << "nothing on the laser is there";
+  EXPECT_GE(with.on_hidden, 25) << "the other source's person must be tracked at its odometry-frame position";
+  EXPECT_GE(without.on_a, 25);
+  EXPECT_GE(with.on_a, 25);
+  // The source lags three scans (0.2 s, more than fusion.max_age): the scans wait for it (fusion.wait 0.5 s) and
+  // each is fused with its own message; without waiting every message is too old when its scan is processed.
+  const Counts lagged = run("people_container7l", true, 3, -1.0);
+  const Counts no_wait = run("people_container7n", true, 3, 0.0);
+  EXPECT_EQ(lagged.answered, 30);
+  EXPECT_GE(lagged.on_hidden, 25) << "scans must wait for the lagging source";
+  EXPECT_GE(lagged.on_a, 25);
+  EXPECT_EQ(no_wait.answered, 30);
+  EXPECT_EQ(no_wait.on_hidden, 0) << "fusion.wait 0: the lagging messages are stale";
+  EXPECT_GE(no_wait.on_a, 25);
+  // The lagging source falls silent after scan 20: the scans wait at most fusion.wait and then go on without it;
+  // every scan is still answered and person A still tracked, the other source's person is lost.
+  const Counts silent = run("people_container7s", true, 3, -1.0, 20);
+  EXPECT_EQ(silent.answered, 30) << "a silent source must not hold the scans";
+  EXPECT_GE(silent.on_a, 25);
+  EXPECT_LT(silent.on_hidden, 25);
 }
 
 // detector.*, guide.* and mask.* change at run time over the parameter services (`cairn param set`): here the
