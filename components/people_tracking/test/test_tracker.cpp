@@ -552,6 +552,45 @@ TEST(Tracker, TrackThatMissedItsLegsLatelyNeedsACloserFitToTakeLegs) {
   EXPECT_GT(seen_on, 0.1);
 }
 
+// The same cost on the joint pairing's pair options: a leg pair between two tracks walking 1 m apart, one seen in
+// every scan (A) and one that missed its legs in the last 3 scans (B, confidence 0.34), goes to the one with the
+// cheaper pair option. The pair is moved from A towards B on a 5 mm grid; with the cost, A keeps it 3 cm farther
+// (0.405 -> 0.435 m from A; removing the term from the pair options alone gives 0.405 again).
+TEST(Tracker, PairBetweenASeenAndACoastingTrackGoesToTheSeenOneFarther) {
+  auto crossover = [](double confidence_cost) {
+    double first_b = -1.0;
+    for (int step = 0; step <= 60; ++step) {
+      const double y = 0.3 + 0.005 * step;
+      TrackerParams p;
+      p.confidence_cost = confidence_cost;
+      PeopleTracker tracker(p);
+      const DetectorParams dp;
+      for (int k = 0; k <= 10; ++k) {
+        std::vector<LegDetection> legs = legsAt({0.1 * k, 0.0});
+        for (const LegDetection& l : legsAt({0.1 * k, 1.0})) legs.push_back(l);
+        tracker.updateLegs(0.1 * k, legs, Pose2{}, dp);
+      }
+      for (int k = 11; k <= 13; ++k) tracker.updateLegs(0.1 * k, legsAt({0.1 * k, 0.0}), Pose2{}, dp);  // B missed
+      const std::vector<Track> confirmed = tracker.confirmedTracks();
+      if (confirmed.size() != 2u) return -2.0;
+      const int id_a = nearest(confirmed, {1.3, 0.0})->id;
+      const double t = 1.4;  // both legs at the same sideways offset y, 0.2 m apart along the walking direction
+      tracker.updateLegs(t, {{{t + 0.1, y}, 0.9, 0.12}, {{t - 0.1, y}, 0.9, 0.12}}, Pose2{}, dp);
+      int a = 0, b = 0;
+      for (const Track& tr : tracker.tracks())
+        if (tr.confirmed && tr.last_update == t) ++(tr.id == id_a ? a : b);
+      if (a + b != 1) return -3.0;  // exactly one track takes the pair
+      if (b == 1 && first_b < 0.0) first_b = y;
+      if (a == 1 && first_b >= 0.0) return -4.0;  // not monotone
+    }
+    return first_b;
+  };
+  const double off = crossover(0.0), on = crossover(2.0);
+  ASSERT_GT(off, 0.3) << "A never takes the pair (" << off << ")";
+  ASSERT_GT(on, 0.3) << on;
+  EXPECT_GE(on, off + 0.02) << "off " << off << ", on " << on;
+}
+
 TEST(Tracker, JointPairingKeepsUncertainTracksOffNeighboursLegs) {
   // Person A walks along +x at 1.3 m/s on y = 0.27 and is tracked; then A is hidden for 0.8 s (no legs: the track
   // coasts and its position covariance grows) and reappears sidestepped to y = 0 (legs at -0.1 and 0.1) with
