@@ -98,7 +98,7 @@ void usage() {
       "        [--reid-window S] [--reid-max-distance M] [--publish-coast S] [--split-scans K] [--joint-pairs NODES] [--confirm-hits N] [--confirm-score L] [--single-leg-stride M]\n"
       "        [--min-leg-confidence C] [--single-leg-min-confidence C] [--track-leg-confidence C] [--beams N] [--smooth S] [--fix-id-swaps] [--dump DIR] [--json]\n"
       "        tracker tuning (README): [--process-noise Q] [--delete-timeout S] [--max-position-sigma M] [--leg-spread M]\n"
-      "        [--leg-spread-lateral M] [--leg-gate CHI2] [--confidence-cost C] [--occluded-coast S] [--occluded-delete-timeout S]\n"
+      "        [--leg-spread-lateral M] [--leg-gate CHI2] [--confidence-cost C] [--confidence-gain G] [--occluded-coast S] [--occluded-delete-timeout S]\n"
       "        [--free-space-delete N] [--visibility-radius M] [--min-init-distance M] [--initial-velocity-sigma V]\n"
       "        [--pair-distance M] [--sigma-pair M] [--sigma-single M] [--min-points N] [--small-cluster-min-range M]\n"
       "        two legs in one cluster: [--split-min-width M] (> 0.45 = off) [--split-gap-ratio R] [--split-min-gap-beams B]\n"

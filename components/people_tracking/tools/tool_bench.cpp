@@ -77,6 +77,7 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--beams") p.laser_beams = static_cast<int>(integer(value(), 8, 100000));
     else if (a == "--leg-gate") p.tracker.leg_gate_chi2 = param(value(), "tracker.leg_gate_chi2");
     else if (a == "--confidence-cost") p.tracker.confidence_cost = param(value(), "tracker.confidence_cost");
+    else if (a == "--confidence-gain") p.tracker.confidence_gain = param(value(), "tracker.confidence_gain");
     else if (a == "--reid-window") p.tracker.reid_window = param(value(), "tracker.reid_window");
     else if (a == "--reid-max-distance") p.tracker.reid_max_distance = param(value(), "tracker.reid_max_distance");
     else if (a == "--publish-coast") p.tracker.publish_coast_time = param(value(), "tracker.publish_coast_time");
