@@ -741,7 +741,7 @@ TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
   EXPECT_EQ(no_wait.answered, 30);
   EXPECT_EQ(no_wait.on_hidden, 0) << "fusion.wait 0: the lagging messages are stale";
   EXPECT_GE(no_wait.on_a, 25);
-  // The lagging source falls silent after scan 20: the scans wait at most fusion.wait and then go on without it;
+  // The lagging source sends nothing for scans 20 on: the scans wait at most fusion.wait and then go on without it;
   // every scan is still answered and person A still tracked, the other source's person is lost.
   const Counts silent = run("people_container7s", true, 3, -1.0, 20);
   EXPECT_EQ(silent.answered, 30) << "a silent source must not hold the scans";
