@@ -653,12 +653,14 @@ TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
   constexpr int steps = 45;
   // lag: the other source's message for scan k is sent with scan k + lag (a camera pipeline slower than the laser,
   // or its messages reaching the executor late under load); wait: fusion.wait (< 0: the default); silent_from: the
-  // source sends nothing for scans from this one on (-1: never). Counts, over scans 15-44: scans answered, tracks on the
-  // other source's person, tracks on person A.
+  // source sends nothing for scans from this one on (-1: never); back_at: with the message for this scan the source
+  // also sends one stamped 100 s earlier (a restarted clock; -1: never). Counts, over scans 15-44: scans answered,
+  // tracks on the other source's person, tracks on person A.
   struct Counts {
     int answered = 0, on_hidden = 0, on_a = 0;
   };
-  auto run = [&](const std::string& container, bool with_fusion, int lag, double wait, int silent_from = -1) {
+  auto run = [&](const std::string& container, bool with_fusion, int lag, double wait, int silent_from = -1,
+                 int back_at = -1) {
     Counts c;
     if (silent_from < 0) silent_from = steps;
     World world;
@@ -673,9 +675,9 @@ TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
       ADD_FAILURE() << container << ": the component did not subscribe to the other source";
       return c;
     }
-    auto send = [&](int k) {
+    auto send = [&](int k, double shift = 0.0) {
       pmsg::PersonDetections m;
-      m.header.stamp = stampOf(400.0 + k * dt);
+      m.header.stamp = stampOf(400.0 + k * dt + shift);
       m.header.frame_id = "base_footprint";
       pmsg::PersonDetection d;
       const Eigen::Vector2d p = world.robot(k * dt).inverseTransform(hidden);
@@ -703,8 +705,11 @@ TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
       // Scans before it wait 8 scans each; the last of them goes with scan first_unheld + 7, and the rest at once.
       return k >= first_unheld + 7 ? k : std::max(last_message, k - 8);
     };
-    rig.play(world, 400.0, steps, dt, [&](int k, double) { if (k >= lag && k - lag < silent_from) send(k - lag); },
-             answered_through);
+    rig.play(world, 400.0, steps, dt, [&](int k, double) {
+      if (k < lag || k - lag >= silent_from) return;
+      send(k - lag);
+      if (k - lag == back_at) send(k - lag, -100.0);
+    }, answered_through);
     // The source catches up: the waiting scans go through.
     for (int k = steps - lag; k < std::min(steps, silent_from); ++k) send(k);
     if (lag > 0) {
@@ -747,6 +752,13 @@ TEST(PeopleTrackerComponent, OtherSourceDetectionsAreFusedAndTracked) {
   EXPECT_EQ(silent.answered, 30) << "a silent source must not hold the scans";
   EXPECT_GE(silent.on_a, 25);
   EXPECT_LT(silent.on_hidden, 25);
+  // A message 100 s in the past is taken as a restart of the source: the queue is dropped with a warning, the next
+  // three scans (their messages still to come) no longer wait and go on without them, and once the messages come in
+  // order again every scan waits for its own: nothing stalls, the other source's person stays tracked.
+  const Counts back = run("people_container7b", true, 3, -1.0, -1, 25);
+  EXPECT_EQ(back.answered, 30);
+  EXPECT_GE(back.on_hidden, 25);
+  EXPECT_GE(back.on_a, 25);
 }
 
 // detector.*, guide.* and mask.* change at run time over the parameter services (`cairn param set`): here the
