@@ -66,8 +66,10 @@ struct TrackerParams {
   double confidence_cost = 2.0;
   // Legs swing along the walking direction but stay at the hip width across it: for a track moving faster than
   // leg_spread_min_speed the spread is leg_spread_sigma along the velocity and leg_spread_lateral_sigma across it,
-  // so a coasting track does not reach sideways into the legs of someone walking next to it.
-  double leg_spread_lateral_sigma = 0.12;  // m
+  // so a coasting track does not reach sideways into the legs of someone walking next to it. Lateral 0.13 m (the
+  // sim's walkers: hip half-width 0.07-0.12 m plus the pair noise) measured against 0.12 / 0.14 / 0.16 / 0.18 m:
+  // docs/benchmarks.md "Lateral leg spread".
+  double leg_spread_lateral_sigma = 0.13;  // m
   double leg_spread_min_speed = 0.3;       // m/s
   // Re-identification: a confirmed track deleted less than reid_window ago gives its id to a new track when it
   // is confirmed within reid_gate_chi2 of the deleted track's prediction (constant velocity, process noise).
