@@ -554,8 +554,8 @@ TEST(Tracker, TrackThatMissedItsLegsLatelyNeedsACloserFitToTakeLegs) {
 
 // The same cost on the joint pairing's pair options: a leg pair between two tracks walking 1 m apart, one seen in
 // every scan (A) and one that missed its legs in the last 3 scans (B, confidence 0.34), goes to the one with the
-// cheaper pair option. The pair is moved from A towards B on a 5 mm grid; with the cost, A keeps it 3 cm farther
-// (0.405 -> 0.435 m from A; removing the term from the pair options alone gives 0.405 again).
+// cheaper pair option. The pair is moved from A towards B on a 5 mm grid; with the cost, A keeps it 3.5 cm farther
+// (0.41 -> 0.445 m from A; removing the term from the pair options alone gives 0.41 again).
 TEST(Tracker, PairBetweenASeenAndACoastingTrackGoesToTheSeenOneFarther) {
   auto crossover = [](double confidence_cost) {
     double first_b = -1.0;
