@@ -51,7 +51,7 @@ TEST(Executor, SimTimeTimersFollowTheSimulatedClock) {
   auto clock = std::make_shared<cairn::Clock>(cairn::ClockType::Ros);
   clock->enable_sim_time(true);
   clock->set_sim_time(cairn::Time{0});
-  int ticks = 0;
+  std::atomic<int> ticks{0};
   auto t = std::make_shared<cairn::TimerBase>(std::make_shared<CallbackGroup>(), clock, 100ms, [&] { ++ticks; });
   exec.add_timer(t);
   exec.spin_for(50ms);
@@ -60,6 +60,9 @@ TEST(Executor, SimTimeTimersFollowTheSimulatedClock) {
     for (int i = 1; i <= 10; ++i) {
       std::this_thread::sleep_for(2ms);
       clock->set_sim_time(cairn::Time{i * 50'000'000LL});  // 50 ms of sim time per step
+      // Each period's tick before the clock moves on: a starved executor thread would otherwise see two periods
+      // pass at once and fire once for them (a timer does not replay missed periods), under ctest -j2 load.
+      for (int k = 0; k < 1000 && ticks < i / 2; ++k) std::this_thread::sleep_for(2ms);
     }
   });
   exec.spin_until([&] { return ticks >= 5; }, 5s);
@@ -82,13 +85,16 @@ TEST(Executor, TimersOnASimClockShareOneClockCallbackThatGoesWithTheExecutor) {
       exec.remove_timer(t.get());
     }
     EXPECT_EQ(clock->update_callbacks(), 1u);
-    int ticks = 0;
+    std::atomic<int> ticks{0};
     auto t = std::make_shared<cairn::TimerBase>(group, clock, 100ms, [&] { ++ticks; });
     exec.add_timer(t);
     std::thread feeder([&] {
       for (int i = 1; i <= 3; ++i) {
         std::this_thread::sleep_for(2ms);
         clock->set_sim_time(cairn::Time{i * 100'000'000LL});
+        // As above: one period per step, and the step's tick before the next (failed once under ctest -j2 with
+        // 2 ticks: two steps 2 ms apart reached a starved executor as one).
+        for (int k = 0; k < 1000 && ticks < i; ++k) std::this_thread::sleep_for(2ms);
       }
     });
     exec.spin_until([&] { return ticks >= 3; }, 5s);
