@@ -182,6 +182,8 @@ class PeopleTracker : public cairn::Node {
     tp.maneuver_process_noise = declareRanged<double>("tracker.maneuver_process_noise", tp.maneuver_process_noise, "m^2/s^3, IMM manoeuvre mode (0 = one walking mode)");
     tp.maneuver_rate = declareRanged<double>("tracker.maneuver_rate", tp.maneuver_rate, "1/s, IMM walking -> manoeuvre switching rate");
     tp.maneuver_end_rate = declareRanged<double>("tracker.maneuver_end_rate", tp.maneuver_end_rate, "1/s, IMM manoeuvre -> walking switching rate");
+    tp.maneuver_gate_sigma = declareRanged<double>("tracker.maneuver_gate_sigma", tp.maneuver_gate_sigma, "m, maneuver gate: S + sigma^2 I for a confirmed track the gate left without a detection (0 = off)");
+    tp.maneuver_gate_time = declareRanged<double>("tracker.maneuver_gate_time", tp.maneuver_gate_time, "s, maneuver gate: velocity variance added = (sigma / time)^2");
     tp.adaptive_nis_threshold = declareRanged<double>("tracker.adaptive_nis_threshold", tp.adaptive_nis_threshold, "smoothed NIS above which a track's process noise is raised (0 = off; one mode only)");
     tp.adaptive_noise_gain = declareRanged<double>("tracker.adaptive_noise_gain", tp.adaptive_noise_gain, "process noise factor while the smoothed NIS is above the threshold");
     tp.adaptive_nis_smoothing = declareRanged<double>("tracker.adaptive_nis_smoothing", tp.adaptive_nis_smoothing, "weight of the newest NIS in the smoothed value");

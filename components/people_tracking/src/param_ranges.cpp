@@ -63,6 +63,8 @@ constexpr Entry kRanges[] = {
     {"tracker.leg_spread_min_speed", {0.0, 10.0}},
     {"tracker.leg_gate_chi2", {0.1, 100.0}},
     {"tracker.confidence_cost", {0.0, 100.0}},
+    {"tracker.maneuver_gate_sigma", {0.0, 2.0}},
+    {"tracker.maneuver_gate_time", {0.05, 5.0}},
     {"tracker.reid_window", {0.0, 60.0}},
     {"tracker.reid_gate_chi2", {0.1, 100.0}},
     {"tracker.reid_max_distance", {0.0, 1000.0}},

@@ -48,6 +48,8 @@ void checkParams(const TrackerParams& p) {
       {"tracker.min_detection_confidence", p.min_detection_confidence},
       {"tracker.confidence_gain", p.confidence_gain},
       {"tracker.confidence_cost", p.confidence_cost},
+      {"tracker.maneuver_gate_sigma", p.maneuver_gate_sigma},
+      {"tracker.maneuver_gate_time", p.maneuver_gate_time},
       {"tracker.leg_spread_sigma", p.leg_spread_sigma},
       {"tracker.leg_spread_lateral_sigma", p.leg_spread_lateral_sigma},
       {"tracker.leg_spread_min_speed", p.leg_spread_min_speed},
@@ -762,6 +764,44 @@ void PeopleTracker::associateGnn(const std::vector<PersonDetection>& dets, std::
     applyUpdate(tracks_[rows[r]], dets[j]);
     updated_[rows[r]] = true;
     used[j] = true;
+  }
+  if (confirmed_stage && params_.maneuver_gate_sigma > 0.0) maneuverGate(dets, used, rows);
+}
+
+// TrackerParams::maneuver_gate_sigma: confirmed tracks the gate left without a detection.
+void PeopleTracker::maneuverGate(const std::vector<PersonDetection>& dets, std::vector<bool>& used,
+                                 const std::vector<std::size_t>& rows) {
+  const Eigen::Matrix2d Sm = params_.maneuver_gate_sigma * params_.maneuver_gate_sigma * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix2d Sv = Sm / (params_.maneuver_gate_time * params_.maneuver_gate_time);
+  const auto held_by_another = [&](std::size_t i, std::size_t j) {
+    for (std::size_t k = 0; k < tracks_.size(); ++k)
+      if (k != i && innovation(tracks_[k], dets[j]).d2 <= params_.gate_chi2) return true;
+    return false;
+  };
+  for (const std::size_t i : rows) {
+    if (updated_[i]) continue;
+    Track& t = tracks_[i];
+    double best = params_.gate_chi2;
+    std::size_t pick = dets.size();
+    for (std::size_t j = 0; j < dets.size(); ++j) {
+      if (used[j] || dets[j].legs == 1) continue;  // a lone leg is too weak a sign that the person turned
+      const Innovation in = innovation(t, dets[j]);
+      const double d2 = in.nu.dot((in.S + Sm).ldlt().solve(in.nu));
+      if (d2 > best || held_by_another(i, j)) continue;
+      best = d2;
+      pick = j;
+    }
+    if (pick == dets.size()) continue;
+    for (Eigen::Matrix4d& P : t.mode_covariance) {
+      P.topLeftCorner<2, 2>() += Sm;
+      P.bottomRightCorner<2, 2>() += Sv;
+    }
+    t.covariance.topLeftCorner<2, 2>() += Sm;
+    t.covariance.bottomRightCorner<2, 2>() += Sv;
+    applyUpdate(t, dets[pick]);
+    if (params_.adaptive_nis_threshold > 0.0) t.nis = std::max(t.nis, 2.0 * params_.adaptive_nis_threshold);
+    updated_[i] = true;
+    used[pick] = true;
   }
 }
 

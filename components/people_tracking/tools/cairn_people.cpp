@@ -103,6 +103,7 @@ void usage() {
       "        [--pair-distance M] [--sigma-pair M] [--sigma-single M] [--min-points N] [--small-cluster-min-range M]\n"
       "        two legs in one cluster: [--split-min-width M] (> 0.45 = off) [--split-gap-ratio R] [--split-min-gap-beams B]\n"
       "        [--maneuver-noise Q] [--maneuver-rate R] [--maneuver-end-rate R]   (IMM; 0 = one walking mode)\n"
+      "        [--maneuver-gate M] [--maneuver-gate-time S]   (maneuver gate; 0 = off)\n"
       "        [--adaptive-nis T] (0 = off) [--adaptive-gain G] [--adaptive-smoothing W]   (adaptive process noise)\n"
       "        motion evidence: [--motion-window S] (0 = off) [--motion-min-age S] [--motion-margin M] [--motion-min-free-scans N] [--moving-fraction F]\n"
       "        [--moving-track-leg-confidence C] [--moving-min-leg-confidence C]\n"

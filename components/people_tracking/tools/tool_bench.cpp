@@ -55,6 +55,8 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--process-noise") p.tracker.process_noise = param(value(), "tracker.process_noise");
     else if (a == "--maneuver-noise") p.tracker.maneuver_process_noise = param(value(), "tracker.maneuver_process_noise");
     else if (a == "--maneuver-rate") p.tracker.maneuver_rate = param(value(), "tracker.maneuver_rate");
+    else if (a == "--maneuver-gate") p.tracker.maneuver_gate_sigma = param(value(), "tracker.maneuver_gate_sigma");
+    else if (a == "--maneuver-gate-time") p.tracker.maneuver_gate_time = param(value(), "tracker.maneuver_gate_time");
     else if (a == "--maneuver-end-rate") p.tracker.maneuver_end_rate = param(value(), "tracker.maneuver_end_rate");
     else if (a == "--adaptive-nis") p.tracker.adaptive_nis_threshold = param(value(), "tracker.adaptive_nis_threshold");
     else if (a == "--adaptive-gain") p.tracker.adaptive_noise_gain = param(value(), "tracker.adaptive_noise_gain");
