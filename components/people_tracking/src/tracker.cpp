@@ -906,6 +906,14 @@ void PeopleTracker::associateJpda(const std::vector<PersonDetection>& dets, std:
   }
   for (std::size_t j = 0; j < nd; ++j)
     if (det_mass[j] >= 0.5) used[j] = true;
+  if (params_.maneuver_gate_sigma > 0.0) {
+    // Confirmed tracks with nothing in their gate (a track whose gated detections were judged clutter keeps that
+    // judgement); a detection with any event weight lies in some track's gate, which maneuverGate() skips.
+    std::vector<std::size_t> rows;
+    for (std::size_t i = 0; i < nt; ++i)
+      if (tracks_[i].confirmed && !updated_[i] && gated[i].empty()) rows.push_back(i);
+    maneuverGate(dets, used, rows);
+  }
   // Detections gated by some track but mostly explained as clutter stay available for initiation only if they
   // are not next to a confirmed track (checked in initiate()).
 }

@@ -801,11 +801,15 @@ TEST(Tracker, AdaptiveProcessNoiseCatchesUpAfterASpeedJump) {
 // gate tuned for steady walking (the detection falls outside it for one scan and starts a second track, so the
 // person's id changes). The maneuver gate takes that detection when no other track's gate holds it; and it does
 // not take a detection that another track's gate holds (the neighbour of a person who vanished).
-TEST(Tracker, ManeuverGateKeepsAPersonWhoTurnsStartsOrStops) {
-  auto lost = [](double maneuver_sigma, int kind) {
+class ManeuverGateTest : public ::testing::TestWithParam<Association> {};
+
+TEST_P(ManeuverGateTest, KeepsAPersonWhoTurnsStartsOrStops) {
+  const Association association = GetParam();
+  auto lost = [association](double maneuver_sigma, int kind) {
     int n_lost = 0;
     for (int seed = 1; seed <= 30; ++seed) {
       TrackerParams params;
+      params.association = association;
       params.maneuver_gate_sigma = maneuver_sigma;
       PeopleTracker tracker(params);
       std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
@@ -834,7 +838,9 @@ TEST(Tracker, ManeuverGateKeepsAPersonWhoTurnsStartsOrStops) {
 
   // Two people side by side 0.5 m apart; A's detections stop (A went out of sight) while B keeps walking. B's
   // detection is in B's gate, so A's track does not jump onto it; a newcomer 1 m beside A is beyond the maneuver gate.
-  PeopleTracker tracker;
+  TrackerParams params;
+  params.association = association;
+  PeopleTracker tracker(params);
   int id_a = 0, id_b = 0;
   for (int k = 0; k <= 40; ++k) {
     const double x = 0.12 * k;
@@ -857,6 +863,9 @@ TEST(Tracker, ManeuverGateKeepsAPersonWhoTurnsStartsOrStops) {
   EXPECT_GT(id_a, 0);
   EXPECT_GT(id_b, 0);
 }
+
+INSTANTIATE_TEST_SUITE_P(Association, ManeuverGateTest, ::testing::Values(Association::kGnn, Association::kJpda),
+                         [](const ::testing::TestParamInfo<Association>& info) { return std::string(toString(info.param)); });
 
 TEST(StaticMap, RasterizesStaticGeometryAndAnswersNearness) {
   Scene scene;

@@ -28,7 +28,7 @@ struct TrackerParams {
   // instead of 0.3: 108 bench runs 424 -> 398 switches, with the static map 426 -> 395, furnished worlds -11 %
   // (docs/benchmarks.md "Process noise and the maneuver gate"). Our choice; the thesis states no value.
   double process_noise = 0.15;
-  // Maneuver gate (GNN; our choice, after the covariance resetting on a detected maneuver of Bar-Shalom, Li &
+  // Maneuver gate (GNN; with JPDA for tracks with nothing in their gate; our choice, after the covariance resetting on a detected maneuver of Bar-Shalom, Li &
   // Kirubarajan 2001, ch. 11): a confirmed track with no detection in its gate takes the best detection within the
   // gate of S + maneuver_gate_sigma^2 I that no other track's gate holds (not a single leg); its covariance grows by
   // maneuver_gate_sigma^2 in position and (maneuver_gate_sigma / maneuver_gate_time)^2 in velocity before the
