@@ -34,7 +34,7 @@ struct TrackerParams {
   // maneuver_gate_sigma^2 in position and (maneuver_gate_sigma / maneuver_gate_time)^2 in velocity before the
   // update (the velocity of a person who turned, started or stopped is what the filter got wrong) and its adaptive
   // noise is raised. A person alone who turns 90 deg in 0.5 s at 1.3 m/s kept the track 35 of 50 times with
-  // q 0.15 (46 with q 0.3) without it, 50 of 50 with it (test ManeuverGateKeepsAPersonWhoTurnsStartsOrStops).
+  // q 0.15 (46 with q 0.3) without it, 50 of 50 with it (test ManeuverGateTest.KeepsAPersonWhoTurnsStartsOrStops).
   // 0 disables.
   double maneuver_gate_sigma = 0.15;  // m
   double maneuver_gate_time = 0.3;    // s
