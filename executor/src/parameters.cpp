@@ -160,9 +160,16 @@ std::optional<std::string> ParameterStore::check(const std::string& name, Parame
   }
   auto in_range = [&](double x) -> std::optional<std::string> {
     if ((d.min && x < *d.min) || (d.max && x > *d.max) || std::isnan(x)) {
+      // Bounds as the value is printed (shortest form): std::to_string gave [0.000000, 5.000000] and turned a
+      // bound of 1e-7 into 0.000000.
       std::ostringstream o;
-      o << "parameter '" << name << "' = " << x << " is outside [" << (d.min ? std::to_string(*d.min) : "-inf")
-        << ", " << (d.max ? std::to_string(*d.max) : "inf") << "]";
+      o << "parameter '" << name << "' = " << x << " is outside [";
+      if (d.min) o << *d.min;
+      else o << "-inf";
+      o << ", ";
+      if (d.max) o << *d.max;
+      else o << "inf";
+      o << "]";
       return o.str();
     }
     return std::nullopt;
