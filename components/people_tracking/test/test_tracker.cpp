@@ -873,7 +873,7 @@ TEST_P(ManeuverGateTest, KeepsAPersonWhoTurnsStartsOrStops) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Association, ManeuverGateTest, ::testing::Values(Association::kGnn, Association::kJpda),
-                         [](const ::testing::TestParamInfo<Association>& info) { return std::string(toString(info.param)); });
+                         [](const auto& info) { return std::string(toString(info.param)); });
 
 TEST(StaticMap, RasterizesStaticGeometryAndAnswersNearness) {
   Scene scene;
