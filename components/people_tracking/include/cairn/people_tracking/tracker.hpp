@@ -28,14 +28,14 @@ struct TrackerParams {
   // instead of 0.3: 108 bench runs 424 -> 398 switches, with the static map 426 -> 395, furnished worlds -11 %
   // (docs/benchmarks.md "Process noise and the maneuver gate"). Our choice; the thesis states no value.
   double process_noise = 0.15;
-  // Maneuver gate (GNN; with JPDA for tracks with nothing in their gate; our choice, after the covariance resetting
-  // on a detected maneuver of Bar-Shalom, Li & Kirubarajan 2001, ch. 11): a confirmed track with no detection in its
-  // gate takes the best detection within the gate of S + maneuver_gate_sigma^2 I that no other track's gate holds
-  // (not a single leg); its covariance grows by maneuver_gate_sigma^2 in position and (maneuver_gate_sigma /
-  // maneuver_gate_time)^2 in velocity before the update (the velocity of a person who turned, started or stopped is
-  // what the filter got wrong) and its adaptive noise is raised. A person alone who turns 90 deg in 0.5 s at 1.3 m/s kept the track 35 of 50 times with
-  // q 0.15 (46 with q 0.3) without it, 50 of 50 with it (test ManeuverGateTest.KeepsAPersonWhoTurnsStartsOrStops).
-  // 0 disables.
+  // Maneuver gate (GNN; with JPDA for tracks with nothing in their gate; our choice, after the covariance
+  // resetting on a detected maneuver of Bar-Shalom, Li & Kirubarajan 2001, ch. 11): a confirmed track with no
+  // detection in its gate takes the best detection within the gate of S + maneuver_gate_sigma^2 I that no other
+  // track's gate holds (not a single leg); its covariance grows by maneuver_gate_sigma^2 in position and
+  // (maneuver_gate_sigma / maneuver_gate_time)^2 in velocity before the update (the velocity of a person who
+  // turned, started or stopped is what the filter got wrong) and its adaptive noise is raised. A person alone who
+  // turns 90 deg in 0.5 s at 1.3 m/s kept the track 35 of 50 times with q 0.15 (46 with q 0.3) without it, 50 of
+  // 50 with it (test ManeuverGateTest.KeepsAPersonWhoTurnsStartsOrStops). 0 disables.
   double maneuver_gate_sigma = 0.15;  // m
   double maneuver_gate_time = 0.3;    // s
   double initial_velocity_sigma = 0.8;  // m/s, velocity std of a new track
