@@ -11,6 +11,10 @@
 1c. A scripted annotation swap: two people walk side by side 0.6 m apart; the recording (annotations every 0.4 s,
    replayed linearly) exchanges their ids between 0.8 and 1.2 s, the tracks stay on their paths: two switches,
    both at an annotation swap; the switches of 1 and 1b are not.
+1d. Appearances (from dontcare.csv): person 1 is counted from the scan its walker appears in, person 2 stood there
+   uncounted (dontcare.csv) before it is counted, person 3 appears inside the field 1 m from person 1 within 1 s,
+   person 4 appears 10 m away: 1 and 3 appeared together, 4 appeared alone, 2 did not appear; without
+   dontcare.csv (the dump of 1) nobody is counted as appeared.
 2. --by-range bands on a scripted dump (two people at 1 m and 5 m, legs and one switch known).
 3. The switches a real `cairn people bench --dump` lists in matches.csv are the bench's id_switches, and the
    dump has what --by-range needs.
@@ -82,6 +86,22 @@ def annotation_swap(d):
     write(d + "/tracker_state.csv", "t,id,x,y,vx,vy,confirmed,coast_s,visibility", state)
 
 
+def appear(d):
+    gt, dc = [], []
+    for k in range(10):
+        t = round(0.1 * k, 1)
+        if k < 5:
+            dc.append((t, 3.0, 0.0))  # person 2, uncounted (e.g. hidden) at (3, 0)
+        else:
+            gt += [(t, 1, 0.0, 0.0), (t, 2, 3.0, 0.0)]
+        if k >= 7:
+            gt.append((t, 3, 0.0, 1.0))
+        if k >= 9:
+            gt.append((t, 4, 10.0, 0.0))
+    write(d + "/groundtruth.csv", "t,id,x,y", gt)
+    write(d + "/dontcare.csv", "t,x,y", dc)
+
+
 def range_dump(d):
     """Two people at 1 m and 5 m from a sensor at the origin, 4 scans; person 2 switches once (at 0.3 s)."""
     gt, legs, robot, matches = [], [], [], []
@@ -122,6 +142,12 @@ def main():
             check(abs(a["nearest"] - 0.8) < 1e-9, f"scripted nearest: {a['nearest']}")
             check(all(s["situation"] == "group" and not s["mutual"] for s in sw), f"scripted situation: {sw}")
             check(not any(s["annotation_swap"] for s in sw), f"scripted: no annotation swap expected: {sw}")
+            check(not any(s["appeared"] for s in sw), f"scripted: nobody appeared without dontcare.csv: {sw}")
+    with tempfile.TemporaryDirectory() as d:
+        appear(d)
+        got = switch_analysis.appearances(d, switch_analysis.by_time(d + "/groundtruth.csv"))
+        want = {1: (True, True), 2: (False, False), 3: (True, True), 4: (True, False)}
+        check(got == want, f"appearances: expected {want}, got {got}")
     with tempfile.TemporaryDirectory() as d:
         crossing(d)
         sw = switch_analysis.analyse(d)

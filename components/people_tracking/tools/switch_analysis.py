@@ -9,7 +9,11 @@ with the switched-from track, so the switches are exactly the bench's id_switche
     on nobody), alive_near (internal, within 0.5 m but not published: coasting or free space), deleted;
   new track B: new (born < 1 s before, on nobody else before), from_other (was on another person before),
     old_unmatched (older, on nobody before);
-  person: switches within 3 s of the person's first counted scan ("early");
+  person: switches within 3 s of the person's first counted scan ("early"); "appeared": the person was counted
+    from the scan its walker appeared in (no uncounted walker within 0.6 m of that spot in the 0.4 s before, from
+    dontcare.csv; runs without dontcare.csv count nobody as appeared), i.e. the recording's annotation began inside
+    the field, and "appeared together": so did another person within 3 m and 1 s of it (a group materialising at
+    once, which a robot never sees: real people walk in);
   old track: confirmed < 3 s before the switch ("young"), and whether another person was within 1 m when it was
     confirmed ("born in a group").
   gap: how long the person had been unmatched (a miss) before the switch (0.1 s = matched in the previous scan).
@@ -91,11 +95,42 @@ def analyse(d):
             last_matched[g] = t
     situations(gt, out)
     swaps = annotation_swaps(gt)
+    appeared = appearances(d, gt)
+    for s in out:
+        s["appeared"], s["appeared_together"] = appeared.get(s["person"], (False, False))
     for s in out:
         s["annotation_swap"] = any(s["person"] in pair and abs(s["t"] - ts) <= MUTUAL for ts, pair in swaps)
     for s in out:
         s["mutual"] = any(o is not s and abs(o["t"] - s["t"]) <= MUTUAL and o["old"] == s["new_id"] and
                           o["new_id"] == s["old"] for o in out)
+    return out
+
+
+APPEAR_NEAR = 0.6  # m, an uncounted walker this close to where a person is first counted was there before
+APPEAR_BEFORE = 0.4  # s, looked back this far (one annotation period)
+TOGETHER_T, TOGETHER_D = 1.0, 3.0  # s, m: "appeared together"
+
+
+def appearances(d, gt):
+    """person -> (appeared, appeared together) (see the module docstring); {} without dontcare.csv."""
+    try:
+        dc = by_time(d + "/dontcare.csv")
+    except OSError:
+        return {}
+    first = {}
+    for t, rows in gt.items():
+        for r in rows:
+            first.setdefault(int(r["id"]), (t, float(r["x"]), float(r["y"])))
+    dc_times = sorted(dc)
+    new = {}
+    for g, (t, x, y) in first.items():
+        before = [u for u in dc_times if t - APPEAR_BEFORE - 1e-6 <= u < t - 1e-6]
+        new[g] = not any(math.hypot(float(r["x"]) - x, float(r["y"]) - y) < APPEAR_NEAR for u in before for r in dc[u])
+    out = {}
+    for g, (t, x, y) in first.items():
+        together = any(h != g and new[h] and abs(t2 - t) <= TOGETHER_T and math.hypot(x2 - x, y2 - y) < TOGETHER_D
+                       for h, (t2, x2, y2) in first.items())
+        out[g] = (new[g], new[g] and together)
     return out
 
 
@@ -208,7 +243,8 @@ def main():
             for s in sw:
                 print(f"{d}: t={s['t']:.2f} person {s['person']}: {s['old']} -> {s['new_id']} "
                       f"{s['old_class']}/{s['new_class']} {s['situation']}{' mutual' if s['mutual'] else ''} "
-                      f"nearest {s['nearest']:.2f} m{' annotation-swap' if s['annotation_swap'] else ''}")
+                      f"nearest {s['nearest']:.2f} m{' annotation-swap' if s['annotation_swap'] else ''}"
+                      f"{' appeared' if s['appeared'] else ''}")
     n = len(allsw)
     print(f"switches: {n} in {len(dirs)} runs")
     for key in ("old_class", "new_class"):
@@ -218,6 +254,9 @@ def main():
     print(f"  early (< 3 s after the person was first counted): {sum(s['early'] for s in allsw)}")
     print(f"  old track young (confirmed < 3 s before): {sum(s['young'] for s in allsw)}, "
           f"of them born in a group: {sum(s['young'] and s['group'] for s in allsw)}")
+    early_appeared = sum(s["early"] and s["appeared"] for s in allsw)
+    together = sum(s["early"] and s["appeared"] and s["appeared_together"] for s in allsw)
+    print(f"  early and appeared inside the field: {early_appeared}, of them together with another person: {together}")
     gaps = collections.Counter("matched in the previous scan" if s["gap"] < 0.15 else "unmatched 0.2-0.5 s"
                                if s["gap"] < 0.55 else "unmatched 0.6-1.5 s" if s["gap"] < 1.55 else
                                "unmatched > 1.5 s" for s in allsw)
