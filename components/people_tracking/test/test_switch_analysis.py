@@ -145,7 +145,8 @@ def main():
             check(not any(s["appeared"] for s in sw), f"scripted: nobody appeared without dontcare.csv: {sw}")
     with tempfile.TemporaryDirectory() as d:
         appear(d)
-        got = switch_analysis.appearances(d, switch_analysis.by_time(d + "/groundtruth.csv"))
+        first = switch_analysis.first_counted(switch_analysis.by_time(d + "/groundtruth.csv"))
+        got = switch_analysis.appearances(d, first)
         want = {1: (True, True), 2: (False, False), 3: (True, True), 4: (True, False)}
         check(got == want, f"appearances: expected {want}, got {got}")
     with tempfile.TemporaryDirectory() as d:

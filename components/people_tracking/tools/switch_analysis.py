@@ -31,6 +31,7 @@ with the switched-from track, so the switches are exactly the bench's id_switche
   person-scans, the switches and switches per 10 000 person-scans, and how often a counted person has a leg
   detection within 0.4 m: any leg scored >= 0.5, two such legs, any leg >= 0.2 (the tracker's weak-leg threshold).
 """
+import bisect
 import collections
 import csv
 import math
@@ -54,17 +55,25 @@ def by_time(path):
     return rows
 
 
+def first_counted(gt):
+    """person -> (t, x, y) of its first counted scan."""
+    first = {}
+    for t in sorted(gt):
+        for r in gt[t]:
+            first.setdefault(int(r["id"]), (t, float(r["x"]), float(r["y"])))
+    return first
+
+
 def analyse(d):
     gt, mt, st = by_time(d + "/groundtruth.csv"), by_time(d + "/matches.csv"), by_time(d + "/tracker_state.csv")
     on_person = collections.defaultdict(set)  # track id -> persons it was matched to so far
-    first_state, confirmed_at, first_counted, last_matched = {}, {}, {}, {}
+    first_state, confirmed_at, last_matched = {}, {}, {}
+    first = first_counted(gt)
     out = []
     for t in sorted(set(gt) | set(mt) | set(st)):
         G = [(int(r["id"]), float(r["x"]), float(r["y"])) for r in gt.get(t, [])]
         M = [(int(r["person"]), int(r["track"]), int(r["switched_from"])) for r in mt.get(t, [])]
         S = {int(r["id"]): r for r in st.get(t, [])}
-        for g, x, y in G:
-            first_counted.setdefault(g, t)
         for i, r in S.items():
             first_state.setdefault(i, t)
             if r["confirmed"] == "1" and i not in confirmed_at:
@@ -88,14 +97,14 @@ def analyse(d):
             near = min([math.hypot(x - x2, y - y2) for g2, x2, y2 in G if g2 != g] or [float("inf")])
             conf_t, group = confirmed_at.get(a, (t, False))
             out.append({"t": t, "person": g, "old": a, "new_id": h, "old_class": old, "new_class": new,
-                        "early": t - first_counted[g] < 3.0, "young": t - conf_t < 3.0, "group": group,
+                        "early": t - first[g][0] < 3.0, "young": t - conf_t < 3.0, "group": group,
                         "nearest": near, "gap": t - last_matched.get(g, t)})
         for g, h in match.items():
             on_person[h].add(g)
             last_matched[g] = t
     situations(gt, out)
     swaps = annotation_swaps(gt)
-    appeared = appearances(d, gt)
+    appeared = appearances(d, first)
     for s in out:
         s["appeared"], s["appeared_together"] = appeared.get(s["person"], (False, False))
     for s in out:
@@ -111,20 +120,17 @@ APPEAR_BEFORE = 0.4  # s, looked back this far (one annotation period)
 TOGETHER_T, TOGETHER_D = 1.0, 3.0  # s, m: "appeared together"
 
 
-def appearances(d, gt):
-    """person -> (appeared, appeared together) (see the module docstring); {} without dontcare.csv."""
+def appearances(d, first):
+    """person -> (appeared, appeared together) (see the module docstring) from first_counted(); {} without
+    dontcare.csv."""
     try:
         dc = by_time(d + "/dontcare.csv")
     except OSError:
         return {}
-    first = {}
-    for t, rows in gt.items():
-        for r in rows:
-            first.setdefault(int(r["id"]), (t, float(r["x"]), float(r["y"])))
     dc_times = sorted(dc)
     new = {}
     for g, (t, x, y) in first.items():
-        before = [u for u in dc_times if t - APPEAR_BEFORE - 1e-6 <= u < t - 1e-6]
+        before = dc_times[bisect.bisect_left(dc_times, t - APPEAR_BEFORE - 1e-6):bisect.bisect_left(dc_times, t - 1e-6)]
         new[g] = not any(math.hypot(float(r["x"]) - x, float(r["y"]) - y) < APPEAR_NEAR for u in before for r in dc[u])
     out = {}
     for g, (t, x, y) in first.items():
@@ -255,7 +261,7 @@ def main():
     print(f"  old track young (confirmed < 3 s before): {sum(s['young'] for s in allsw)}, "
           f"of them born in a group: {sum(s['young'] and s['group'] for s in allsw)}")
     early_appeared = sum(s["early"] and s["appeared"] for s in allsw)
-    together = sum(s["early"] and s["appeared"] and s["appeared_together"] for s in allsw)
+    together = sum(s["early"] and s["appeared_together"] for s in allsw)
     print(f"  early and appeared inside the field: {early_appeared}, of them together with another person: {together}")
     gaps = collections.Counter("matched in the previous scan" if s["gap"] < 0.15 else "unmatched 0.2-0.5 s"
                                if s["gap"] < 0.55 else "unmatched 0.6-1.5 s" if s["gap"] < 1.55 else
