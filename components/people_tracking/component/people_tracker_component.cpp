@@ -214,6 +214,9 @@ class PeopleTracker : public cairn::Node {
     tp.occluded_coast_time = declareRanged<double>("tracker.occluded_coast_time", tp.occluded_coast_time, "s, occluded confirmed tracks are published this long");
     tp.occluded_delete_timeout = declareRanged<double>("tracker.occluded_delete_timeout", tp.occluded_delete_timeout, "s without update deletes a track occluded since its last update");
     tp.free_space_delete_scans = static_cast<int>(declareRanged<int64_t>("tracker.free_space_delete_scans", tp.free_space_delete_scans, "consecutive scans with beams through a track delete it"));
+    tp.standing_time = declareRanged<double>("tracker.standing_time", tp.standing_time, "s below standing_speed after which a track that gets nothing is predicted in place (0 = off)");
+    tp.standing_speed = declareRanged<double>("tracker.standing_speed", tp.standing_speed, "m/s, a track slower than this after every update for standing_time is standing");
+    tp.standing_position_noise = declareRanged<double>("tracker.standing_position_noise", tp.standing_position_noise, "m^2/s, position variance growth of a standing track while it gets nothing");
     tp.split_scans = static_cast<int>(declareRanged<int64_t>("tracker.split_scans", tp.split_scans, "scans with four legs in a track's gate before it splits (0 = never)"));
     tp.joint_pairs_max_nodes = static_cast<int>(declareRanged<int64_t>("tracker.joint_pairs_max_nodes", tp.joint_pairs_max_nodes, "search nodes per gating cluster for the joint leg pairing (0 = per-leg Hungarian)"));
     tp.single_leg_stride_sigma = declareRanged<double>("tracker.single_leg_stride_sigma", tp.single_leg_stride_sigma, "m, single-leg update std along the walking direction (0 = off)");

@@ -61,6 +61,9 @@ void checkParams(const TrackerParams& p) {
       {"tracker.occluded_coast_time", p.occluded_coast_time},
       {"tracker.occluded_delete_timeout", p.occluded_delete_timeout},
       {"tracker.free_space_delete_scans", p.free_space_delete_scans},
+      {"tracker.standing_time", p.standing_time},
+      {"tracker.standing_speed", p.standing_speed},
+      {"tracker.standing_position_noise", p.standing_position_noise},
       {"tracker.split_scans", p.split_scans},
       {"tracker.joint_pairs_max_nodes", p.joint_pairs_max_nodes},
       {"tracker.single_leg_stride_sigma", p.single_leg_stride_sigma},
@@ -144,12 +147,31 @@ void combineModes(Track& t, int modes) {
   }
 }
 
+// A confirmed track whose updates have left it slower than standing_speed for standing_time (TrackerParams).
+bool standing(const Track& t, const TrackerParams& p) {
+  return p.standing_time > 0.0 && t.confirmed && t.slow_since >= 0.0 && t.last_update - t.slow_since >= p.standing_time;
+}
+
 // Prediction to `stamp`: one constant-velocity filter, or the IMM cycle (mode mixing by the Markov chain, then
 // each mode predicted with its own process noise).
 void predictTrack(Track& t, double stamp, const TrackerParams& p) {
   const double dt = stamp - t.stamp;
   if (dt <= 0.0) return;
+  const bool coasting = t.last_update < t.stamp;  // no detection in the last scan
   t.stamp = stamp;
+  if (coasting && standing(t, p)) {
+    // Predicted in place (TrackerParams::standing_*): every mode, so that the IMM's mixing keeps it there too.
+    const double sv = p.standing_speed / 3.0;
+    for (int k = 0; k < 2; ++k) {
+      t.mode_state[k].tail<2>().setZero();
+      t.mode_covariance[k].topRightCorner<2, 2>().setZero();
+      t.mode_covariance[k].bottomLeftCorner<2, 2>().setZero();
+      t.mode_covariance[k].bottomRightCorner<2, 2>() = sv * sv * Eigen::Matrix2d::Identity();
+      t.mode_covariance[k].topLeftCorner<2, 2>() += p.standing_position_noise * dt * Eigen::Matrix2d::Identity();
+    }
+    combineModes(t, immOn(p) ? 2 : 1);
+    return;
+  }
   if (!immOn(p)) {
     // Adaptive process noise (TrackerParams::adaptive_*): a run of surprising updates raises the noise level.
     const bool adapt = p.adaptive_nis_threshold > 0.0 && t.nis > p.adaptive_nis_threshold;
@@ -279,6 +301,8 @@ void PeopleTracker::associate(const std::vector<PersonDetection>& dets, std::vec
     Track& t = tracks_[i];
     t.confidence += params_.confidence_gain * ((updated_[i] ? 1.0 : 0.0) - t.confidence);
     if (updated_[i]) {
+      if (t.velocity().norm() >= params_.standing_speed) t.slow_since = -1.0;
+      else if (t.slow_since < 0.0) t.slow_since = last_stamp_;
       t.visibility = Visibility::kDetected;
       t.free_space_scans = 0;
       t.occluded_since_update = true;  // vacuous until the first miss

@@ -51,6 +51,7 @@ expect_error("option --confidence-cost expects a number in [0, 100], got '-1'" b
 expect_error("option --confidence-gain expects a number in [0, 1], got '1.5'" bench --world auto --trajectories ok_tracks.csv --confidence-gain 1.5)
 expect_error("option --maneuver-gate expects a number in [0, 2], got '-0.1'" bench --world auto --trajectories ok_tracks.csv --maneuver-gate -0.1)
 expect_error("option --maneuver-gate-time expects a number in [0.05, 5], got '0'" bench --world auto --trajectories ok_tracks.csv --maneuver-gate-time 0)
+expect_error("option --standing-speed expects a number in [0.01, 2], got '0'" bench --world auto --trajectories ok_tracks.csv --standing-speed 0)
 expect_error("option --free-space-delete expects an integer in [1, 1000], got '0'" bench --world auto --trajectories ok_tracks.csv --free-space-delete 0)
 expect_error("scan rate (--rate) must be in (0, 1000] Hz, got 1e+09" bench --world auto --trajectories ok_tracks.csv --rate 1e9)
 expect_error("duration (--duration) must be >= 0 s" bench --world auto --trajectories ok_tracks.csv --duration -1)

@@ -77,6 +77,9 @@ TEST(Tracker, RejectsParametersOutOfRange) {
   p = {};
   p.confirm_hits = 0;
   EXPECT_NE(message(p).find("tracker.confirm_hits must be in [1, 100], got 0"), std::string::npos);
+  p = {};
+  p.standing_position_noise = -0.01;
+  EXPECT_EQ(message(p), "tracker parameter tracker.standing_position_noise must be in [0, 10], got -0.01");
 }
 
 TEST(Tracker, ConstantVelocityTargetIsConfirmedAndItsVelocityEstimated) {
@@ -315,6 +318,51 @@ TEST(Tracker, CoastingTrackDoesNotReachSidewaysForANeighboursLeg) {
       const bool took = t.last_update == 1.1;
       EXPECT_EQ(took, !sideways || lateral >= 0.2) << "sideways " << sideways << " lateral " << lateral;
     }
+  }
+}
+
+TEST(Tracker, HiddenStandingPersonIsPredictedInPlaceAndFollowedWhenWalkingOff) {
+  // A person stands at (3, 0.5) for 2 s (legs jittering 2 cm, so the velocity estimate is small but not zero), is
+  // hidden for 1.2 s, then walks off along +x at 1 m/s. As a standing track (TrackerParams::standing_*) it waits
+  // where the person stood, its position std growing by standing_position_noise; the constant-velocity model
+  // (standing_time 0) moves it on at the velocity estimate and widens it by its process noise, to more than twice
+  // as much. Either way the walk afterwards is followed with the same id.
+  for (const double standing_time : {TrackerParams{}.standing_time, 0.0}) {
+    TrackerParams p;
+    p.standing_time = standing_time;
+    PeopleTracker tracker(p);
+    const DetectorParams dp;
+    std::mt19937 rng(7);
+    std::normal_distribution<double> jitter(0.0, 0.02);
+    const Eigen::Vector2d stand(3.0, 0.5);
+    for (int k = 0; k <= 20; ++k)
+      tracker.updateLegs(0.1 * k, legsAt(stand + Eigen::Vector2d(jitter(rng), jitter(rng)), 0.05), Pose2{}, dp);
+    ASSERT_EQ(tracker.confirmedTracks().size(), 1u);
+    const Track before = tracker.confirmedTracks().at(0);
+    for (int k = 21; k <= 32; ++k) tracker.updateLegs(0.1 * k, {}, Pose2{}, dp);
+    ASSERT_EQ(tracker.confirmedTracks().size(), 1u);
+    const Track hidden = tracker.confirmedTracks().at(0);
+    const double sigma = std::sqrt(hidden.positionCovariance().diagonal().maxCoeff());
+    const double drift = (hidden.position() - before.position()).norm();
+    if (standing_time > 0.0) {  // measured: std 0.054 -> 0.16 m, 6 mm moved (the first missed scan's CV step)
+      EXPECT_EQ(hidden.velocity().norm(), 0.0);
+      EXPECT_LT(drift, 0.01);
+      EXPECT_LT(sigma, 0.25);
+    } else {  // measured: std 0.054 -> 0.42 m, 7 cm moved at the velocity estimate's 6 cm/s
+      EXPECT_GT(sigma, 0.35);
+      EXPECT_GT(drift, 0.03);
+    }
+    Eigen::Vector2d walker = stand;
+    for (int k = 33; k <= 52; ++k) {
+      walker = stand + Eigen::Vector2d(0.1 * (k - 32), 0.0);
+      tracker.updateLegs(0.1 * k, legsAt(walker), Pose2{}, dp);
+    }
+    const auto out = tracker.confirmedTracks();
+    const Track* t = nearest(out, walker);
+    ASSERT_NE(t, nullptr);
+    EXPECT_EQ(t->id, before.id) << "standing_time " << standing_time;
+    EXPECT_LT((t->position() - walker).norm(), 0.3) << "standing_time " << standing_time;
+    EXPECT_GT(t->velocity().x(), 0.7) << "standing_time " << standing_time;
   }
 }
 

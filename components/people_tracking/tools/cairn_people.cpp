@@ -100,6 +100,7 @@ void usage() {
       "        tracker tuning (README): [--process-noise Q] [--delete-timeout S] [--max-position-sigma M] [--leg-spread M]\n"
       "        [--leg-spread-lateral M] [--leg-gate CHI2] [--confidence-cost C] [--confidence-gain G] [--occluded-coast S] [--occluded-delete-timeout S]\n"
       "        [--free-space-delete N] [--visibility-radius M] [--min-init-distance M] [--initial-velocity-sigma V]\n"
+      "        [--standing-time S] [--standing-speed V] [--standing-noise Q]   (standing people; time 0 = off)\n"
       "        [--pair-distance M] [--sigma-pair M] [--sigma-single M] [--min-points N] [--small-cluster-min-range M]\n"
       "        two legs in one cluster: [--split-min-width M] (> 0.45 = off) [--split-gap-ratio R] [--split-min-gap-beams B]\n"
       "        [--maneuver-noise Q] [--maneuver-rate R] [--maneuver-end-rate R]   (IMM; 0 = one walking mode)\n"

@@ -86,6 +86,9 @@ int runBenchVerb(int argc, char** argv) {
     else if (a == "--occluded-coast") p.tracker.occluded_coast_time = param(value(), "tracker.occluded_coast_time");
     else if (a == "--occluded-delete-timeout") p.tracker.occluded_delete_timeout = param(value(), "tracker.occluded_delete_timeout");
     else if (a == "--free-space-delete") p.tracker.free_space_delete_scans = static_cast<int>(integerParam(value(), "tracker.free_space_delete_scans"));
+    else if (a == "--standing-time") p.tracker.standing_time = param(value(), "tracker.standing_time");
+    else if (a == "--standing-speed") p.tracker.standing_speed = param(value(), "tracker.standing_speed");
+    else if (a == "--standing-noise") p.tracker.standing_position_noise = param(value(), "tracker.standing_position_noise");
     else if (a == "--split-scans") p.tracker.split_scans = static_cast<int>(integerParam(value(), "tracker.split_scans"));
     else if (a == "--visibility-radius") p.tracker.visibility_radius = param(value(), "tracker.visibility_radius");
     else if (a == "--min-init-distance") p.tracker.min_init_distance = param(value(), "tracker.min_init_distance");
