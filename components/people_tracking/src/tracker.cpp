@@ -979,8 +979,10 @@ void PeopleTracker::prune() {
   std::erase_if(tracks_, [&](const Track& t) {
     const double since = last_stamp_ - t.last_update;
     const double max_var = t.positionCovariance().diagonal().maxCoeff();
-    const double timeout = t.occluded_since_update ? std::max(params_.delete_timeout, params_.occluded_delete_timeout)
-                                                   : params_.delete_timeout;
+    // A standing person unseen is as likely to be there still as an occluded one (TrackerParams::standing_*).
+    const double timeout = t.occluded_since_update || standing(t, params_)
+                               ? std::max(params_.delete_timeout, params_.occluded_delete_timeout)
+                               : params_.delete_timeout;
     const bool remove = (!t.confirmed && since > params_.tentative_timeout) ||
                         (t.confirmed && since > timeout) ||
                         t.free_space_scans >= params_.free_space_delete_scans ||

@@ -103,8 +103,9 @@ struct TrackerParams {
   // predicted in place — velocity 0 with std standing_speed / 3, no position-velocity correlation, position
   // variance growing by standing_position_noise per second — instead of by the constant-velocity model, whose
   // process noise alone widens a hidden person's position std to ~0.6 m within 2 s (q 0.15), far enough to take
-  // the legs of whoever stands next to them. The next update continues with the constant-velocity model. Hotel
-  // circle runs, seeds 1-27, ids undone: 119 -> 91 switches, all 162 runs 408 -> 382, raw 629 -> 603
+  // the legs of whoever stands next to them. The next update continues with the constant-velocity model. A
+  // standing track is deleted after occluded_delete_timeout, as an occluded one (free space still deletes it).
+  // Hotel circle runs, seeds 1-27, ids undone: 119 -> 79 switches, all 162 runs 408 -> 370, raw 629 -> 591
   // (docs/benchmarks.md "Standing people"). standing_time 0 disables.
   double standing_time = 1.0;             // s
   double standing_speed = 0.3;            // m/s
