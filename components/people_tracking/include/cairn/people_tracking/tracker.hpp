@@ -96,7 +96,7 @@ struct TrackerParams {
   // space: the person is not there), or hit something there that was not classified as a leg (missed).
   double visibility_radius = 0.3;       // m, beams within this radius around the predicted position are checked
   double occluded_coast_time = 1.0;     // s, outputTracks() keeps occluded confirmed tracks this long
-  double occluded_delete_timeout = 3.0; // s, deletion of a track that has been occluded since its last update
+  double occluded_delete_timeout = 3.0; // s, deletion of a track occluded since its last update (or standing)
   int free_space_delete_scans = 2;      // consecutive free-space scans delete a track
   // Standing people (our choice; the theses state no model for them): a confirmed track whose speed after each
   // update has stayed below standing_speed for standing_time is *standing*. While it gets no detection it is
