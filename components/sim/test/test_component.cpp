@@ -85,12 +85,17 @@ struct Listener {
     node = std::make_unique<cairn::Node>(o);
   }
   void start() { spinner = std::thread([this] { exec.spin(); }); }
-  ~Listener() {
+  /// After stop() no callback runs: what the callbacks write to may be destroyed.
+  void stop() {
     exec.cancel();
     if (spinner.joinable()) spinner.join();
   }
+  ~Listener() { stop(); }
 };
 
+// What a listener heard. Declared before the Listener whose callbacks write to it, so that it outlives the
+// listener's spinning thread (destroyed the other way round, a callback still running pushed into freed
+// vectors: test_sim_component segfaulted at the end of its first test in a CI run).
 struct Heard {
   std::mutex mu;
   std::vector<sensor_msgs::msg::LaserScan> scans;
@@ -119,8 +124,8 @@ TEST(SimulatorComponent, ScansOdometryClockAndCmdVelOverDds) {
   const auto loaded = c.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
 
-  Listener ls("listener");
   Heard h;
+  Listener ls("listener");
   auto& n = *ls.node;
   auto scan_sub = n.create_subscription<sensor_msgs::msg::LaserScan>(
       "scan", cairn::QoS::sensor_data().keep_last(50), [&](const sensor_msgs::msg::LaserScan& m, const cairn::MessageInfo& info) {
@@ -147,7 +152,9 @@ TEST(SimulatorComponent, ScansOdometryClockAndCmdVelOverDds) {
   auto cmd_pub = n.create_publisher<geometry_msgs::msg::Twist>("cmd_vel", cairn::QoS{});
   ls.start();
 
-  ASSERT_TRUE(waitFor([&] { return sizeOf(h, h.scans) >= 3 && sizeOf(h, h.odom) >= 20; }, 30s)) << "no scans/odometry over DDS";
+  // ground_truth is its own topic, matched on its own schedule: wait for it too (truth.back() below)
+  ASSERT_TRUE(waitFor([&] { return sizeOf(h, h.scans) >= 3 && sizeOf(h, h.odom) >= 20 && sizeOf(h, h.truth) >= 1; }, 30s))
+      << "no scans/odometry/ground truth over DDS";
   ASSERT_TRUE(waitFor([&] { return cmd_pub->inter_process_subscription_count() > 0; }, 20s)) << "cmd_vel subscription not discovered";
   {
     std::lock_guard l(h.mu);
@@ -266,8 +273,8 @@ TEST(SimulatorComponent, DrivesItsRoutePublishesPeopleAndDrivesSimTimeNodes) {
   const auto loaded = c.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
 
-  Listener ls("observer", {{"use_sim_time", true}});
   Heard h;
+  Listener ls("observer", {{"use_sim_time", true}});
   auto& n = *ls.node;
   auto scan_sub = n.create_subscription<sensor_msgs::msg::LaserScan>("scan", cairn::QoS::sensor_data(), [&](const sensor_msgs::msg::LaserScan& m) {
     std::lock_guard l(h.mu);
@@ -435,8 +442,8 @@ TEST(SimulatorComponent, ScanStreamOverDdsEqualsTheCoreRunWithTheSameSeed) {
   const auto loaded = c.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
 
-  Listener ls("det_listener");
   Heard h;
+  Listener ls("det_listener");
   auto scan_sub = ls.node->create_subscription<sensor_msgs::msg::LaserScan>(
       "scan", cairn::QoS{}.keep_last(1000).reliable().transient_local(), [&](const sensor_msgs::msg::LaserScan& m) {
         std::lock_guard l(h.mu);
@@ -504,8 +511,8 @@ TEST(LogPlayerComponent, PlaysTheAcesExcerptWithTheLogTimestamps) {
   const auto loaded = c.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
 
-  Listener ls("log_listener");
   Heard h;
+  Listener ls("log_listener");
   auto& n = *ls.node;
   const auto q = cairn::QoS{}.keep_last(100).reliable().transient_local();
   auto scan_sub = n.create_subscription<sensor_msgs::msg::LaserScan>("scan", q, [&](const sensor_msgs::msg::LaserScan& m) {
@@ -564,6 +571,8 @@ struct LogListener {
   std::shared_ptr<cairn::Subscription<sensor_msgs::msg::LaserScan>> scan_sub;
   std::shared_ptr<cairn::Subscription<nav_msgs::msg::Odometry>> odom_sub;
   std::shared_ptr<cairn::Subscription<rosgraph_msgs::msg::Clock>> clock_sub;
+  // Members are destroyed after the destructor's body: stop the spinning thread first.
+  ~LogListener() { ls.stop(); }
   LogListener() {
     const auto q = cairn::QoS{}.keep_all().reliable();
     auto& n = *ls.node;
