@@ -13,6 +13,7 @@
 #include "composition_interfaces/srv/LoadNode.hpp"
 #include "composition_interfaces/srv/UnloadNode.hpp"
 #include "cairn/parameter_msgs.hpp"
+#include "cairn/test_support.hpp"
 #include "rcl_interfaces/srv/GetParameters.hpp"
 #include "std_msgs/msg/String.hpp"
 
@@ -60,7 +61,7 @@ TEST(Container, LoadListUnloadOverDdsServices) {
   cairn::Executor exec(cairn::Executor::Options{2});
   cairn::ComponentLoader loader;
   cairn::ComponentManager mgr(ctx, exec, "c2", loader);
-  std::thread spinner([&] { exec.spin(); });
+  cairn::testing::Spinner spinner(exec);  // stops and joins on every way out (an ASSERT returning early too)
 
   ClientNode client;
   cairn::Node& cli = *client.node;
@@ -108,8 +109,6 @@ TEST(Container, LoadListUnloadOverDdsServices) {
   auto empty = list->call(ListNodes_Request{}, 10s);
   ASSERT_TRUE(empty.has_value());
   EXPECT_TRUE(empty->full_node_names.empty());
-  exec.cancel();
-  spinner.join();
 }
 
 TEST(Container, LoadThatHangsTimesOutAndTheContainerKeepsServing) {
@@ -185,7 +184,7 @@ TEST(Container, RestartRestoresTheOriginalLaunchParameters) {
   cairn::Executor exec(cairn::Executor::Options{2});
   cairn::ComponentLoader loader;
   cairn::ComponentManager mgr(ctx, exec, "c5", loader);
-  std::thread spinner([&] { exec.spin(); });
+  cairn::testing::Spinner spinner(exec);  // stops and joins on every way out (an ASSERT returning early too)
 
   cairn::LoadRequest first{"cairn_demo::Talker", "talker"};
   first.node_namespace = "/robot";
@@ -249,6 +248,4 @@ TEST(Container, RestartRestoresTheOriginalLaunchParameters) {
   auto pid = params->call(preq, 20s);
   ASSERT_TRUE(pid.has_value());
   EXPECT_EQ(std::get<int64_t>(cairn::from_parameter_msg(pid->values.at(0))), static_cast<int64_t>(getpid()));
-  exec.cancel();
-  spinner.join();
 }

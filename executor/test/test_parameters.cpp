@@ -4,6 +4,7 @@
 #include "rcl_interfaces/srv/GetParameters.hpp"
 #include "rcl_interfaces/srv/SetParameters.hpp"
 #include "cairn/parameter_msgs.hpp"
+#include "cairn/test_support.hpp"
 
 using namespace std::chrono_literals;
 
@@ -37,7 +38,7 @@ TEST(Parameters, RemoteGetAndSetOverServices) {
   o.parameter_overrides["gain"] = 2.0;
   cairn::Node node(o);
   EXPECT_EQ(node.declare_parameter<double>("gain", 1.0, {"", 0.0, 10.0, false}), 2.0);
-  std::thread spinner([&] { exec.spin(); });
+  cairn::testing::Spinner spinner(exec);  // stops and joins on every way out (an ASSERT returning early too)
   auto ctx2 = cairn::Context::create();
   cairn::Executor exec2;
   cairn::NodeOptions co("cli", &exec2);
@@ -68,6 +69,4 @@ TEST(Parameters, RemoteGetAndSetOverServices) {
   ASSERT_EQ(gresp->values.size(), 2u);
   EXPECT_EQ(cairn::from_parameter_msg(gresp->values[0]), cairn::ParameterValue(5.0));
   EXPECT_EQ(cairn::from_parameter_msg(gresp->values[1]), cairn::ParameterValue(false));
-  exec.cancel();
-  spinner.join();
 }

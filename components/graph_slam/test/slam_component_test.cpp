@@ -82,14 +82,19 @@ TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
   ASSERT_TRUE(loaded.ok) << loaded.error;
   container.start();
 
+  // Everything the peer's callbacks write is declared before the peer, so it outlives the peer's spinning thread
+  // (the other way round, a /tf or map message arriving at the end wrote into destroyed locals).
+  std::mutex mu;
+  std::atomic<int> poses{0}, tfs{0};
+  geometry_msgs::msg::PoseWithCovarianceStamped last_pose;
+  std::vector<double> map_stamps;  // of the maps published while the scans come in
+  std::atomic<bool> got_map{false};
+  nav_msgs::msg::OccupancyGrid map;
   cairn::testing::PeerNode robot("robot");
   cairn::Node& n = robot.node();
   auto scan_pub = n.create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS::sensor_data().reliable().keep_last(50));
   auto odom_pub = n.create_publisher<nav_msgs::msg::Odometry>("odom", cairn::QoS{}.keep_last(50));
   auto tf_static = n.create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", cairn::QoS::latched());
-  std::mutex mu;
-  std::atomic<int> poses{0}, tfs{0};
-  geometry_msgs::msg::PoseWithCovarianceStamped last_pose;
   auto pose_sub = n.create_subscription<geometry_msgs::msg::PoseWithCovarianceStamped>(
       "slam/pose", cairn::QoS{}, [&](const geometry_msgs::msg::PoseWithCovarianceStamped& m) {
         std::lock_guard l(mu);
@@ -103,7 +108,6 @@ TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
   auto save = n.create_client<cairn_slam_msgs::srv::SaveState_Request, cairn_slam_msgs::srv::SaveState_Response>("slam/save_state");
   auto load = n.create_client<cairn_slam_msgs::srv::LoadState_Request, cairn_slam_msgs::srv::LoadState_Response>("slam/load_state");
   auto optimize = n.create_client<cairn_slam_msgs::srv::Optimize_Request, cairn_slam_msgs::srv::Optimize_Response>("slam/optimize");
-  std::vector<double> map_stamps;  // of the maps published while the scans come in
   auto map_counter = n.create_subscription<nav_msgs::msg::OccupancyGrid>(
       "map", cairn::QoS::latched().keep_last(500), [&](const nav_msgs::msg::OccupancyGrid& m) {
         std::lock_guard l(mu);
@@ -159,8 +163,6 @@ TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
   }
 
   // A late subscriber gets the latched map.
-  std::atomic<bool> got_map{false};
-  nav_msgs::msg::OccupancyGrid map;
   auto map_sub = n.create_subscription<nav_msgs::msg::OccupancyGrid>("map", cairn::QoS::latched(), [&](const nav_msgs::msg::OccupancyGrid& m) {
     std::lock_guard l(mu);
     map = m;

@@ -855,9 +855,9 @@ TEST(PeopleTrackerComponent, DetectorParametersChangeAtRunTime) {
 // after 0.25 s of coasting, so every short dropout was "lost: track deleted" and lost_timeout had no effect.
 TEST(PeopleTrackerComponent, GuideSurvivesAShortDropout) {
   World world;
+  std::map<int64_t, pmsg::GuideState> guide;  // before the rig: written by its spinning thread until rig.stop()
   FallbackMountRig rig;
   ASSERT_NO_FATAL_FAILURE(rig.start("people_container9", world, 0.2));
-  std::map<int64_t, pmsg::GuideState> guide;
   auto guide_sub = rig.sim->create_subscription<pmsg::GuideState>("people/guide", cairn::QoS{}, [&](const pmsg::GuideState& m) {
     std::lock_guard l(rig.heard.mu);
     guide[key(m.header.stamp)] = m;
