@@ -52,46 +52,10 @@ double yawOf(const geometry_msgs::msg::Quaternion& q) {
   return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
 }
 
-// A container with one component, spinning on its own thread.
-struct Container {
-  std::shared_ptr<cairn::Context> ctx = cairn::Context::create();
-  cairn::Executor exec;
-  cairn::ComponentLoader loader;
-  cairn::ComponentManager mgr;
-  std::thread spinner;
-  explicit Container(const std::string& name) : mgr(ctx, exec, name, loader) {}
-  cairn::LoadResult load(const cairn::LoadRequest& req) {
-    auto r = mgr.load(req);
-    if (r.ok && !spinner.joinable()) spinner = std::thread([this] { exec.spin(); });
-    return r;
-  }
-  ~Container() {
-    exec.cancel();
-    if (spinner.joinable()) spinner.join();
-  }
-};
-
-// The listening side: its own context, so every message arrives over DDS.
-struct Listener {
-  std::shared_ptr<cairn::Context> ctx = cairn::Context::create();
-  cairn::Executor exec;
-  std::unique_ptr<cairn::Node> node;
-  std::thread spinner;
-  explicit Listener(const std::string& name, std::map<std::string, cairn::ParameterValue> params = {}) {
-    cairn::NodeOptions o(name, &exec);
-    o.context = ctx;
-    o.start_parameter_services = false;
-    o.parameter_overrides = std::move(params);
-    node = std::make_unique<cairn::Node>(o);
-  }
-  void start() { spinner = std::thread([this] { exec.spin(); }); }
-  /// After stop() no callback runs: what the callbacks write to may be destroyed.
-  void stop() {
-    exec.cancel();
-    if (spinner.joinable()) spinner.join();
-  }
-  ~Listener() { stop(); }
-};
+// A component in an in-process container spinning on its own thread, and the listening side in its own context
+// (every message arrives over DDS).
+using Container = cairn::testing::InProcessContainer;
+using Listener = cairn::testing::PeerNode;
 
 // What a listener heard. Declared before the Listener whose callbacks write to it, so that it outlives the
 // listener's spinning thread (destroyed the other way round, a callback still running pushed into freed
@@ -123,10 +87,11 @@ TEST(SimulatorComponent, ScansOdometryClockAndCmdVelOverDds) {
   req.parameters["people.crowd"] = false;
   const auto loaded = c.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
+  c.start();
 
   Heard h;
   Listener ls("listener");
-  auto& n = *ls.node;
+  auto& n = ls.node();
   auto scan_sub = n.create_subscription<sensor_msgs::msg::LaserScan>(
       "scan", cairn::QoS::sensor_data().keep_last(50), [&](const sensor_msgs::msg::LaserScan& m, const cairn::MessageInfo& info) {
         std::lock_guard l(h.mu);
@@ -272,10 +237,11 @@ TEST(SimulatorComponent, DrivesItsRoutePublishesPeopleAndDrivesSimTimeNodes) {
   req.parameters["people.rate"] = 250.0;  // above the 100 Hz physics rate: once per physics step
   const auto loaded = c.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
+  c.start();
 
   Heard h;
   Listener ls("observer", {{"use_sim_time", true}});
-  auto& n = *ls.node;
+  auto& n = ls.node();
   auto scan_sub = n.create_subscription<sensor_msgs::msg::LaserScan>("scan", cairn::QoS::sensor_data(), [&](const sensor_msgs::msg::LaserScan& m) {
     std::lock_guard l(h.mu);
     h.scans.push_back(m);
@@ -369,12 +335,13 @@ TEST(SimulatorComponent, NavigateToDrivesToAPoseAndANamedLocationAndReportsArriv
   req.parameters["people.crowd"] = false;
   const auto loaded = c.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
+  c.start();
 
   Listener ls("navigator");
   ls.start();
   using cairn_sim_msgs::srv::NavigateTo_Request;
   using cairn_sim_msgs::srv::NavigateTo_Response;
-  auto client = ls.node->create_client<NavigateTo_Request, NavigateTo_Response>("/sim/navigate_to");
+  auto client = ls.node().create_client<NavigateTo_Request, NavigateTo_Response>("/sim/navigate_to");
   ASSERT_TRUE(client->wait_for_service(20s));
 
   NavigateTo_Request goal;  // a pose
@@ -441,10 +408,11 @@ TEST(SimulatorComponent, ScanStreamOverDdsEqualsTheCoreRunWithTheSameSeed) {
   req.qos_overrides["/scan"] = keep;
   const auto loaded = c.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
+  c.start();
 
   Heard h;
   Listener ls("det_listener");
-  auto scan_sub = ls.node->create_subscription<sensor_msgs::msg::LaserScan>(
+  auto scan_sub = ls.node().create_subscription<sensor_msgs::msg::LaserScan>(
       "scan", cairn::QoS{}.keep_last(1000).reliable().transient_local(), [&](const sensor_msgs::msg::LaserScan& m) {
         std::lock_guard l(h.mu);
         h.scans.push_back(m);
@@ -510,10 +478,11 @@ TEST(LogPlayerComponent, PlaysTheAcesExcerptWithTheLogTimestamps) {
   req.qos_overrides["/clock"] = keep;
   const auto loaded = c.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
+  c.start();
 
   Heard h;
   Listener ls("log_listener");
-  auto& n = *ls.node;
+  auto& n = ls.node();
   const auto q = cairn::QoS{}.keep_last(100).reliable().transient_local();
   auto scan_sub = n.create_subscription<sensor_msgs::msg::LaserScan>("scan", q, [&](const sensor_msgs::msg::LaserScan& m) {
     std::lock_guard l(h.mu);
@@ -575,7 +544,7 @@ struct LogListener {
   ~LogListener() { ls.stop(); }
   LogListener() {
     const auto q = cairn::QoS{}.keep_all().reliable();
-    auto& n = *ls.node;
+    auto& n = ls.node();
     scan_sub = n.create_subscription<sensor_msgs::msg::LaserScan>("scan", q, [this](const sensor_msgs::msg::LaserScan& m) {
       std::lock_guard l(mu);
       scans.push_back(nanos(m.header.stamp));
@@ -616,7 +585,8 @@ TEST(LogPlayerComponent, FullAcesLogPacedByItsConsumerWithBoundedMemory) {
   req.parameters["wait_for_subscribers"] = int64_t{1};
   const auto loaded = c.load(req);
   ASSERT_TRUE(loaded.ok) << loaded.error;
-  const auto player = std::static_pointer_cast<cairn_sim::LogPlayer>(c.mgr.get(loaded.unique_id));
+  c.start();
+  const auto player = std::static_pointer_cast<cairn_sim::LogPlayer>(c.manager().get(loaded.unique_id));
   ASSERT_TRUE(waitFor([&] { return player->finished(); }, 100s)) << "played " << player->scansPublished();
   EXPECT_FALSE(player->failed());
   EXPECT_EQ(player->scansPublished(), 7374u);

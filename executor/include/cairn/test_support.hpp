@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <thread>
@@ -65,17 +66,22 @@ class InProcessContainer {
 
 /// A plain node in its own Context and executor (a "remote" peer: nothing it exchanges with components in
 /// other contexts is delivered intra-process). Create publishers/subscriptions/clients on node(), then start().
+/// Its callbacks run on the spinning thread until stop() or destruction: whatever they write to must be declared
+/// before the PeerNode (or outlive a stop()).
 class PeerNode {
  public:
-  explicit PeerNode(const std::string& name) : ctx_(Context::create()) {
+  explicit PeerNode(const std::string& name, std::map<std::string, ParameterValue> parameters = {})
+      : ctx_(Context::create()) {
     NodeOptions o(name, &exec_);
     o.context = ctx_;
     o.start_parameter_services = false;
+    o.parameter_overrides = std::move(parameters);
     node_ = std::make_unique<Node>(o);
   }
   Node& node() { return *node_; }
   void start() { spinner_ = std::make_unique<Spinner>(exec_); }
-  ~PeerNode() { spinner_.reset(); }
+  void stop() { spinner_.reset(); }
+  ~PeerNode() { stop(); }
 
  private:
   std::shared_ptr<Context> ctx_;
