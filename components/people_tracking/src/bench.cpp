@@ -66,11 +66,11 @@ class NearestNeighbourTracker {
 };
 
 struct RobotPath {
-  enum Kind { kStatic, kCircle, kFile } kind = kStatic;
+  enum Kind { kStatic, kCircle, kFile, kRoute } kind = kStatic;
   Eigen::Vector2d center = Eigen::Vector2d::Zero();
   double heading = 0.0;  // static robot
   double radius = 0.0;
-  std::vector<std::pair<double, Pose2>> poses;
+  std::vector<std::pair<double, Pose2>> poses;  // kFile: trajectory time; kRoute: time since the start, one loop
 
   Pose2 at(double t, double t0) const {
     if (kind == kStatic) return Pose2{center.x(), center.y(), heading};
@@ -79,6 +79,7 @@ struct RobotPath {
       const double a = w * (t - t0);
       return Pose2{center.x() + radius * std::cos(a), center.y() + radius * std::sin(a), a + M_PI / 2};
     }
+    if (kind == kRoute) t = std::fmod(std::max(0.0, t - t0), poses.back().first);
     if (t <= poses.front().first) return poses.front().second;
     if (t >= poses.back().first) return poses.back().second;
     auto hi = std::lower_bound(poses.begin(), poses.end(), t, [](const auto& p, double x) { return p.first < x; });
@@ -90,10 +91,45 @@ struct RobotPath {
   }
 };
 
-RobotPath parseRobotPath(const std::string& spec, const Eigen::Vector2d& center) {
+// Keyframes of one loop along `route` (closed back to its first point): turn in place at `turn_rate` towards each
+// segment, then drive it at `speed`; times from 0.
+std::vector<std::pair<double, Pose2>> routePoses(const std::vector<Eigen::Vector2d>& route, double speed,
+                                                 double turn_rate) {
+  std::vector<Eigen::Vector2d> pts = route;
+  if ((pts.front() - pts.back()).norm() > 1e-9) pts.push_back(pts.front());
+  std::vector<std::pair<double, Pose2>> out;
+  double t = 0.0;
+  const Eigen::Vector2d d0 = pts[1] - pts[0];
+  double theta = std::atan2(d0.y(), d0.x());
+  out.push_back({t, Pose2{pts[0].x(), pts[0].y(), theta}});
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    const Eigen::Vector2d d = pts[i] - pts[i - 1];
+    if (d.norm() < 1e-9) continue;
+    const double heading = theta + std::remainder(std::atan2(d.y(), d.x()) - theta, 2 * M_PI);
+    if (std::abs(heading - theta) > 1e-9) {
+      t += std::abs(heading - theta) / turn_rate;
+      theta = heading;
+      out.push_back({t, Pose2{pts[i - 1].x(), pts[i - 1].y(), theta}});
+    }
+    t += d.norm() / speed;
+    out.push_back({t, Pose2{pts[i].x(), pts[i].y(), theta}});
+  }
+  return out;
+}
+
+RobotPath parseRobotPath(const std::string& spec, const Eigen::Vector2d& center,
+                         const std::vector<Eigen::Vector2d>& route, double route_speed) {
   RobotPath r;
   r.center = center;
   if (spec.empty()) return r;
+  if (spec.rfind("route:", 0) == 0) {
+    if (route.size() < 2) throw InputError("robot path '" + spec + "': needs a route of the world (--world with that route)");
+    if (!(route_speed > 0.0)) throw InputError("robot path '" + spec + "': route speed must be > 0");
+    r.kind = RobotPath::kRoute;
+    r.poses = routePoses(route, route_speed, 1.0);
+    if (!(r.poses.back().first > 0.0)) throw InputError("robot path '" + spec + "': the route has no length");
+    return r;
+  }
   if (spec.rfind("circle:", 0) == 0) {
     r.kind = RobotPath::kCircle;
     try {
@@ -253,7 +289,7 @@ BenchResult runBench(const BenchParams& params) {
     walls.addSegment({hi.x(), hi.y()}, {lo.x(), hi.y()}, ObjectClass::kWall);
     walls.addSegment({lo.x(), hi.y()}, {lo.x(), lo.y()}, ObjectClass::kWall);
   }
-  RobotPath robot = parseRobotPath(params.robot_path, center);
+  RobotPath robot = parseRobotPath(params.robot_path, center, params.robot_route, params.robot_route_speed);
   if (!auto_world && robot.kind == RobotPath::kStatic) robot.heading = params.robot_start.theta;
 
   LaserModel laser = params.laser;

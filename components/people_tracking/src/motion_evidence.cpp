@@ -245,12 +245,24 @@ bool MotionEvidence::freeIn(const Past& past, const Eigen::Vector2d& p) const {
     if (!past.full_circle) return false;
     hi = 0;
   }
-  // Both bracketing beams end behind the point (or have no return within a range_max beyond it).
+  // Both bracketing beams end behind the point (or have no return within a range_max beyond it). A return stands
+  // for its surface at its own bearing only: a surface whose range falls towards the point's bearing (seen from the
+  // beam's other neighbour, less than memory_surface_gap away: one surface) is extrapolated there, `offset` beams
+  // on, by slope_factor times that step (a wall seen at a grazing angle comes decimetres nearer within one beam).
   const double behind = r + params_.margin;
   for (const long k : {lo, hi}) {
     const auto b = static_cast<std::size_t>(k);
     if (s.valid(b)) {
-      if (s.ranges[b] < behind) return false;
+      const double range = s.ranges[b];
+      const long away = k == lo ? k - 1 : k + 1;  // the neighbour on the side away from the point
+      const long a = past.full_circle ? (away + n) % n : away;
+      double nearer = 0.0;
+      if (a >= 0 && a < n && s.valid(static_cast<std::size_t>(a))) {
+        const double step = static_cast<double>(s.ranges[static_cast<std::size_t>(a)]) - range;
+        const double offset = k == lo ? f - static_cast<double>(lo) : static_cast<double>(lo + 1) - f;
+        if (step > 0.0 && step < params_.memory_surface_gap) nearer = params_.slope_factor * step * offset;
+      }
+      if (range - nearer < behind) return false;
     } else if (!(s.range_max >= behind) || !s.beyondRange(b)) {
       return false;  // no return: free only if the laser would have seen something there (not a NaN or a too-close echo)
     }

@@ -84,6 +84,7 @@ constexpr Entry kRanges[] = {
     {"motion.window", {0.0, 10.0}},
     {"motion.min_age", {0.0, 10.0}},
     {"motion.margin", {0.0, 2.0}},
+    {"motion.slope_factor", {0.0, 10.0}},
     {"motion.min_free_scans", {1.0, 64.0}},
     {"motion.memory", {0.0, 86400.0}},
     {"motion.memory_resolution", {0.02, 1.0}},

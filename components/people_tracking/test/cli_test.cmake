@@ -40,6 +40,10 @@ expect_error("option --process-noise expects a finite number, got 'inf'" bench -
 # Options that set a core parameter check the component's range for it (param_ranges.hpp); before, a negative
 # process noise made the bench hang and the others ran with nonsense values.
 file(WRITE ok_tracks.csv "t,id,x,y\n0,1,0.5,2\n0.4,1,0.6,2\n0.8,1,0.7,2\n")
+expect_error("world 'office' has no route 'nope'" bench --world office --trajectories ok_tracks.csv --robot-path route:nope)
+expect_error("option --robot-path expects a finite number, got 'fast'" bench --world office --trajectories ok_tracks.csv --robot-path route:corridor_patrol:fast)
+expect_error("robot path 'route:corridor_patrol:0': route speed must be > 0" bench --world office --trajectories ok_tracks.csv --robot-path route:corridor_patrol:0)
+expect_error("robot path 'route:corridor_patrol': needs a route of the world" bench --world auto --trajectories ok_tracks.csv --robot-path route:corridor_patrol)
 expect_error("option --process-noise expects a number in [1e-06, 100], got '-1'" bench --world auto --trajectories ok_tracks.csv --process-noise -1)
 expect_error("option --max-position-sigma expects a number in [0.01, 100], got '0'" bench --world auto --trajectories ok_tracks.csv --max-position-sigma 0)
 expect_error("option --min-leg-confidence expects a number in [0, 1], got '2'" bench --world auto --trajectories ok_tracks.csv --min-leg-confidence 2)

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <unistd.h>
@@ -304,4 +306,71 @@ TEST(Bench, BadInputs) {
   p = excerpt();
   p.model = "/nonexistent/model.yml";
   EXPECT_THROW(runBench(p), InputError);
+}
+
+// route:NAME drives BenchParams::robot_route in a loop (turning in place at its ends), here along a corridor of a
+// world given as geometry: walls 1.05 m to either side with 1 m door openings every 6 m, each door leaf open into
+// its room, one walker along the corridor. The robot's poses (robot.csv) follow the route at the given speed. The
+// walls' first returns after each opening, 5-8 m ahead at a grazing angle, must not look moving
+// (MotionEvidenceParams::slope_factor): without it they start tracks that ride along the walls.
+TEST(Bench, RouteRobotPathDrivesTheCorridorAndItsWallsStartFewerTracks) {
+  const std::string dir = (std::filesystem::temp_directory_path() / ("cairn_pt_route_" + std::to_string(::getpid()))).string();
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream f(dir + "/walker.csv");
+    f << "t,id,x,y\n";
+    for (int k = 0; k <= 100; ++k) f << 0.5 * k << ",1," << 4.0 + 0.5 * k * 0.8 << ",0.45\n";  // 0.8 m/s east
+  }
+  BenchParams p;
+  p.trajectories = dir + "/walker.csv";
+  p.world = "corridor";
+  p.trajectory_offset = Pose2{};
+  p.world_geometry = [](double, Scene& s) {
+    for (double side : {-1.0, 1.0}) {
+      for (double x = -2.0; x < 50.0; x += 6.0) {
+        s.addSegment({x, 1.05 * side}, {x + 5.0, 1.05 * side}, ObjectClass::kWall);
+        s.addSegment({x + 5.0, 1.05 * side}, {x + 5.0, 1.95 * side}, ObjectClass::kDoor);
+      }
+      s.addSegment({-2.0, 6.0 * side}, {50.0, 6.0 * side}, ObjectClass::kWall);
+    }
+  };
+  p.robot_path = "route:corridor";
+  p.robot_route = {{0.0, 0.0}, {30.0, 0.0}};
+  p.robot_route_speed = 0.6;
+  p.laser_beams = 720;
+  p.dump_dir = dir + "/dump";
+  std::size_t fp_slope = 0, fp_without = 0;
+  for (const std::uint64_t seed : {1, 2}) {
+    p.seed = seed;
+    p.motion.slope_factor = MotionEvidenceParams{}.slope_factor;
+    fp_slope += runBench(p).cairn.mot.fp;
+    if (seed == 1) {
+      std::ifstream robot(p.dump_dir + "/robot.csv");
+      std::string line;
+      std::getline(robot, line);
+      std::vector<std::array<double, 4>> poses;
+      while (std::getline(robot, line)) {
+        std::array<double, 4> q{};
+        ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf", &q[0], &q[1], &q[2], &q[3]), 4) << line;
+        poses.push_back(q);
+      }
+      ASSERT_EQ(poses.size(), 501u);  // 50 s at 10 Hz
+      EXPECT_NEAR(poses[0][1], 0.0, 1e-9);
+      EXPECT_NEAR(poses[100][1], 6.0, 1e-6);  // 0.6 m/s for 10 s, heading east
+      EXPECT_NEAR(poses[100][3], 0.0, 1e-9);
+      EXPECT_NEAR(poses[500][1], 30.0, 1e-6);  // the route's end after 50 s
+    }
+    p.dump_dir.clear();
+    p.motion.slope_factor = 0.0;
+    fp_without += runBench(p).cairn.mot.fp;
+    p.dump_dir = dir + "/dump";
+  }
+  EXPECT_LT(fp_slope, fp_without * 3 / 4) << fp_slope << " vs " << fp_without;
+  // A route without points, or without a speed, is refused.
+  p.robot_route = {{0.0, 0.0}};
+  EXPECT_THROW(runBench(p), InputError);
+  p.robot_route = {{0.0, 0.0}, {30.0, 0.0}};
+  p.robot_route_speed = 0.0;
+  EXPECT_THROW(runBench(p), InputError);
+  std::filesystem::remove_all(dir);
 }

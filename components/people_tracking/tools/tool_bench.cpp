@@ -107,6 +107,7 @@ int runBenchVerb(int argc, char** argv) {
       p.detector.crossed_track_leg_confidence = param(value(), "detector.crossed_track_leg_confidence");
     else if (a == "--motion-min-age") p.motion.min_age = param(value(), "motion.min_age");
     else if (a == "--motion-margin") p.motion.margin = param(value(), "motion.margin");
+    else if (a == "--motion-slope-factor") p.motion.slope_factor = param(value(), "motion.slope_factor");
     else if (a == "--motion-min-free-scans")
       p.motion.min_free_scans = static_cast<std::size_t>(integerParam(value(), "motion.min_free_scans"));
     else if (a == "--single-leg-min-confidence")
@@ -142,6 +143,16 @@ int runBenchVerb(int argc, char** argv) {
     }
     p.robot_start = Pose2{world->robot_start.x, world->robot_start.y, world->robot_start.theta};
     p.world_geometry = [world](double t, Scene& scene) { addWorldGeometry(*world, t, scene); };
+    if (p.robot_path.rfind("route:", 0) == 0) {  // route:NAME[:SPEED], a route of this world
+      const std::string spec = p.robot_path.substr(6);
+      const std::size_t colon = spec.find(':');
+      const std::string name = spec.substr(0, colon);
+      if (colon != std::string::npos) p.robot_route_speed = parseNumber("--robot-path", spec.substr(colon + 1));
+      const auto route = world->routes.find(name);
+      if (route == world->routes.end())
+        throw InputError("--robot-path " + p.robot_path + ": world '" + p.world + "' has no route '" + name + "'");
+      for (const auto& q : route->second) p.robot_route.emplace_back(q.x, q.y);
+    }
   }
 #endif
   const BenchResult r = runBench(p);

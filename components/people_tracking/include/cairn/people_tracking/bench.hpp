@@ -51,7 +51,11 @@ struct BenchParams {
   // Undo the recording's id exchanges (fixIdExchanges; before smoothing) — diagnostic, default off: the walkers
   // replay the annotations as recorded.
   bool fix_id_exchanges = false;
-  std::string robot_path;      // "" static; "circle:R" circles the centre at 0.4 m/s; or CSV t,x,y,theta
+  // "" static; "circle:R" circles the centre at 0.4 m/s; "route:NAME[:SPEED]" drives robot_route (the caller puts
+  // the world's route NAME there) in a loop at robot_route_speed, turning in place at 1 rad/s; or CSV t,x,y,theta
+  std::string robot_path;
+  std::vector<Eigen::Vector2d> robot_route;  // world frame
+  double robot_route_speed = 0.6;            // m/s (the simulator's route_speed)
   std::uint64_t seed = 1;
   double scan_rate = 10.0;     // Hz
   double start = 0.0;          // s after the first annotation

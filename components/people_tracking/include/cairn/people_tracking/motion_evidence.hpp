@@ -32,6 +32,15 @@ struct MotionEvidenceParams {
   double window = 1.0;    // s, earlier scans consulted (0 disables: no evidence, the classifier alone decides)
   double min_age = 0.15;  // s, scans newer than this are not consulted (a stance foot has not moved yet)
   double margin = 0.15;   // m, an earlier beam must end this far behind the point to count as passing through it
+  // A return stands for its surface at its own bearing only. Where the surface's range falls towards the point
+  // (the beam's neighbour on the other side lies farther, by less than memory_surface_gap: one surface), the beam
+  // must end `margin` behind the point after its range is brought nearer by this times that step times the
+  // point's bearing offset from the beam (in beams). A wall seen at a grazing angle comes decimetres nearer within
+  // one beam: without this, a wall's first returns after a door opening, seen from a robot driving down a corridor,
+  // were "free" (the beam on one side had gone through the opening, the one on the other side hit the wall
+  // 0.1-0.3 m beyond the point), formed moving clusters and started tracks (docs/benchmarks.md "Corridor walls").
+  // 0 disables. Our choice (1: the linear extrapolation).
+  double slope_factor = 1.0;
   // A point is free when at least this many of the consulted scans saw it so. One is not enough for clusters of one
   // or two points: a single missing return (the simulator's 0.2 % dropouts; on real lasers dark or specular surfaces
   // at grazing angles) reads as "no return within range", i.e. free, and a door frame seen edge-on then looked like
@@ -47,7 +56,8 @@ struct MotionEvidenceParams {
   double memory_size = 40.0;       // m, side of the square grid kept around the sensor; rays are followed to a quarter
                                    // of it (10 m: the detector's max_range)
   // m, consecutive returns closer than this are one surface: the cells between them are not free (a wall seen at a
-  // grazing angle). Our choice: at 8 m and 0.33 deg a wall's returns are 1 m apart at 2.7 deg incidence.
+  // grazing angle), and slope_factor extrapolates across it. Our choice: at 8 m and 0.33 deg a wall's returns are
+  // 1 m apart at 2.7 deg incidence.
   double memory_surface_gap = 1.0;
 };
 
