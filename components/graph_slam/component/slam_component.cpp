@@ -182,7 +182,7 @@ class SlamNode : public cairn::Node {
       return;
     }
     publishPose(m.header.stamp, *u);
-    publishTf(m.header.stamp);
+    publishTf(m.header.stamp, u->pose, odom);
     // The map is rebuilt from every node's scan (GraphSlam::map(), O(nodes)), so it is rebuilt at most once per
     // map_publish_period even when optimizations come faster: on a patrol over mapped ground the graph is
     // re-optimized about once a second and a rebuild after each one grew to most of this thread's time (the
@@ -218,8 +218,15 @@ class SlamNode : public cairn::Node {
     pose_pub_->publish(std::move(p));
   }
 
-  void publishTf(const builtin_interfaces::msg::Time& stamp) {
-    const gs::Pose2 m2o = slam_->mapToLocal();
+  // map -> odom (REP 105): the one that takes the scan's odometry pose to its map pose, map_pose * odom_pose^-1.
+  // The SLAM's local frame (GraphSlam::mapToLocal) is the odometry frame only if the first scan had odometry, and
+  // only as far as scan matching has not corrected the odometry since. The simulator's first scans come before its
+  // first odometry: the local frame then started at the origin while the odometry frame had the robot at its start
+  // pose, and consumers putting the map into the odometry frame (the people tracker's static map) were off by it. A scan without odometry repeats the last
+  // one; before any, and without odometry at all (use_odom false), the local frame stands for the odometry frame.
+  void publishTf(const builtin_interfaces::msg::Time& stamp, const gs::Pose2& map_pose, const std::optional<gs::Pose2>& odom) {
+    if (odom) map_to_odom_ = gs::compose(map_pose, gs::inverse(*odom));
+    const gs::Pose2 m2o = map_to_odom_ ? *map_to_odom_ : slam_->mapToLocal();
     tf2_msgs::msg::TFMessage tf;
     geometry_msgs::msg::TransformStamped t;
     t.header.stamp = stamp;
@@ -296,6 +303,7 @@ class SlamNode : public cairn::Node {
       rs.message = "loaded " + std::to_string(rs.nodes) + " nodes from " + rq.path;
       last_map_stamp_ = -1e18;
       map_dirty_ = true;  // the loaded map goes out with the next scan (also in localization-only mode)
+      map_to_odom_.reset();  // another map frame: from the next scan with odometry
     } catch (const std::exception& e) {
       rs.success = false;
       rs.message = e.what();
@@ -326,6 +334,7 @@ class SlamNode : public cairn::Node {
   std::deque<OdomSample> odom_;
   bool mount_known_ = false;
   std::optional<double> first_scan_stamp_;
+  std::optional<gs::Pose2> map_to_odom_;  ///< from the last scan with odometry (publishTf)
   double last_map_stamp_ = -1e18;
   bool map_dirty_ = true;  ///< nodes added or poses optimized since the last map (true: a loaded map goes out)
   std::chrono::steady_clock::time_point last_warning_{};

@@ -4,11 +4,15 @@
 // error without stopping the node, and malformed scans are skipped.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <mutex>
+#include <thread>
 
 #include "cairn/sim/simulator.hpp"
 #include "cairn/sim/world.hpp"
@@ -251,4 +255,100 @@ TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
   scan_pub->publish(again);
   EXPECT_TRUE(wait_for([&] { return poses.load() > before; }, 10s));
   fs::remove_all(dir);
+}
+
+// map -> odom (REP 105) takes the odometry pose to the map pose: published map->odom composed with the odometry
+// at a scan's stamp gives /slam/pose of that scan. The simulator's odometry starts at the robot's start pose (2,
+// 12.55) and here, as in the demo, the first scans arrive before the first odometry: the SLAM's local frame then
+// starts at the origin, and map->odom taken from it was off by the start pose (12.7 m).
+TEST(SlamComponent, MapToOdomTakesTheOdometryToThePoseAlsoWhenTheFirstScansHadNone) {
+  namespace sim = cairn::sim;
+  const sim::World office = sim::loadWorld(sim::resolveWorldPath("office"));
+  sim::SimConfig cfg;
+  cfg.seed = 7;
+  cfg.people = false;
+  cfg.crowd = false;
+  sim::Simulator s(office, cfg);
+  s.followRoute({{2, 12.55}, {12, 12.55}});
+  sim::SimOutput out;
+  s.advance(10.0, out);
+  ASSERT_GT(out.scans.size(), 60u);
+  ASSERT_GT(std::hypot(out.odometry.front().pose.x, out.odometry.front().pose.y), 10.0);
+
+  cairn::testing::InProcessContainer container("slam_tf_container");
+  cairn::LoadRequest req{"cairn_graph_slam::SlamNode", "slam"};
+  req.parameters["use_verifier"] = false;
+  const auto loaded = container.load(req);
+  ASSERT_TRUE(loaded.ok) << loaded.error;
+  container.start();
+
+  std::mutex mu;
+  std::atomic<int> poses{0};
+  std::map<double, std::array<double, 3>> slam_pose;  // stamp -> x, y, yaw (map)
+  std::map<double, std::array<double, 3>> map_to_odom;
+  cairn::testing::PeerNode robot("robot");
+  cairn::Node& n = robot.node();
+  auto scan_pub = n.create_publisher<sensor_msgs::msg::LaserScan>("scan", cairn::QoS::sensor_data().reliable().keep_last(50));
+  auto odom_pub = n.create_publisher<nav_msgs::msg::Odometry>("odom", cairn::QoS{}.keep_last(50));
+  auto tf_static = n.create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", cairn::QoS::latched());
+  auto yaw = [](const geometry_msgs::msg::Quaternion& q) { return 2.0 * std::atan2(q.z, q.w); };
+  auto pose_sub = n.create_subscription<geometry_msgs::msg::PoseWithCovarianceStamped>(
+      "slam/pose", cairn::QoS{}, [&](const geometry_msgs::msg::PoseWithCovarianceStamped& m) {
+        std::lock_guard l(mu);
+        slam_pose[cairn::to_seconds(m.header.stamp)] = {m.pose.pose.position.x, m.pose.pose.position.y, yaw(m.pose.pose.orientation)};
+        ++poses;
+      });
+  auto tf_sub = n.create_subscription<tf2_msgs::msg::TFMessage>("/tf", cairn::QoS{}.keep_last(100), [&](const tf2_msgs::msg::TFMessage& m) {
+    std::lock_guard l(mu);
+    for (const auto& t : m.transforms)
+      if (t.header.frame_id == "map" && t.child_frame_id == "odom")
+        map_to_odom[cairn::to_seconds(t.header.stamp)] = {t.transform.translation.x, t.transform.translation.y, yaw(t.transform.rotation)};
+  });
+  robot.start();
+  ASSERT_TRUE(wait_for([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s));
+  tf2_msgs::msg::TFMessage st;
+  geometry_msgs::msg::TransformStamped mount;
+  mount.header.frame_id = "base_link";
+  mount.child_frame_id = "laser";
+  mount.transform.rotation.w = 1.0;
+  st.transforms.push_back(mount);
+  tf_static->publish(st);
+
+  std::size_t oi = 0;
+  for (std::size_t i = 0; i < out.scans.size(); ++i) {
+    const auto& scan = out.scans[i];
+    // The first five scans go out before any odometry (the component predicts them); then the odometry up to the next
+    // scan, one scan ahead, so that it has arrived when its scan does (two topics are not delivered in order).
+    const double until = i + 1 < out.scans.size() ? out.scans[i + 1].stamp : scan.stamp;
+    while (i >= 5 && oi < out.odometry.size() && out.odometry[oi].stamp <= until + 1e-9) odom_pub->publish(toMsg(out.odometry[oi++]));
+    if (i == 5) std::this_thread::sleep_for(100ms);  // the odometry is in before the scan that needs it
+    const int before = poses.load();
+    scan_pub->publish(toMsg(scan));
+    wait_for([&] { return poses.load() > before; }, 500ms);
+  }
+  ASSERT_TRUE(wait_for([&] {
+    std::lock_guard l(mu);
+    return map_to_odom.size() >= out.scans.size() * 8 / 10;
+  }, 10s));
+  robot.stop();
+  container.stop();
+
+  // Every scan after the odometry started: map->odom (x) odometry at its stamp == its /slam/pose.
+  std::size_t checked = 0;
+  std::lock_guard l(mu);
+  for (const auto& [stamp, p] : slam_pose) {
+    const auto tf = map_to_odom.find(stamp);
+    if (tf == map_to_odom.end() || stamp < out.scans[8].stamp) continue;
+    const auto o = std::min_element(out.odometry.begin(), out.odometry.end(),
+                                    [&](const auto& a, const auto& b) { return std::abs(a.stamp - stamp) < std::abs(b.stamp - stamp); });
+    ASSERT_LT(std::abs(o->stamp - stamp), 1e-6);
+    const auto& [tx, ty, th] = tf->second;
+    const double x = tx + std::cos(th) * o->pose.x - std::sin(th) * o->pose.y;
+    const double y = ty + std::sin(th) * o->pose.x + std::cos(th) * o->pose.y;
+    EXPECT_NEAR(x, p[0], 1e-3) << "stamp " << stamp;
+    EXPECT_NEAR(y, p[1], 1e-3) << "stamp " << stamp;
+    EXPECT_NEAR(std::remainder(th + o->pose.theta - p[2], 2 * M_PI), 0.0, 1e-3) << "stamp " << stamp;
+    ++checked;
+  }
+  EXPECT_GT(checked, out.scans.size() / 2);
 }
