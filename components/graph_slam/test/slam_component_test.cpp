@@ -61,19 +61,36 @@ nav_msgs::msg::Odometry toMsg(const cairn::sim::Odometry& o) {
   return m;
 }
 
-}  // namespace
-
-TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
+// A run of the simulator's office without people, the robot driving from its start (2, 12.55) along the corridor.
+cairn::sim::SimOutput officeRun(std::uint64_t seed, double to_x, double seconds) {
   namespace sim = cairn::sim;
   const sim::World office = sim::loadWorld(sim::resolveWorldPath("office"));
   sim::SimConfig cfg;
-  cfg.seed = 5;
+  cfg.seed = seed;
   cfg.people = false;
   cfg.crowd = false;
   sim::Simulator s(office, cfg);
-  s.followRoute({{2, 12.55}, {14, 12.55}});
+  s.followRoute({{2, 12.55}, {to_x, 12.55}});
   sim::SimOutput out;
-  s.advance(25.0, out);
+  s.advance(seconds, out);
+  return out;
+}
+
+// base_link -> laser: identity (the simulator's laser sits at the base origin).
+tf2_msgs::msg::TFMessage laserMount() {
+  tf2_msgs::msg::TFMessage st;
+  geometry_msgs::msg::TransformStamped mount;
+  mount.header.frame_id = "base_link";
+  mount.child_frame_id = "laser";
+  mount.transform.rotation.w = 1.0;
+  st.transforms.push_back(mount);
+  return st;
+}
+
+}  // namespace
+
+TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
+  const cairn::sim::SimOutput out = officeRun(5, 14.0, 25.0);
   ASSERT_GT(out.scans.size(), 100u);
 
   cairn::testing::InProcessContainer container("slam_container");
@@ -120,14 +137,8 @@ TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
   robot.start();
   ASSERT_TRUE(wait_for([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s));
 
-  // base_link -> laser: identity (sim's laser sits at the base origin); the component must use it, not laser_theta.
-  tf2_msgs::msg::TFMessage st;
-  geometry_msgs::msg::TransformStamped mount;
-  mount.header.frame_id = "base_link";
-  mount.child_frame_id = "laser";
-  mount.transform.rotation.w = 1.0;
-  st.transforms.push_back(mount);
-  tf_static->publish(st);
+  // base_link -> laser: identity; the component must use it, not laser_theta.
+  tf_static->publish(laserMount());
 
   // Paced by the component: the next scan goes out once the pose of the previous one came back (a sensor-data
   // subscription keeps only the newest scans; this test checks every scan is processed, not queueing).
@@ -262,16 +273,7 @@ TEST(SlamComponent, MapsASimulatedRunOverDdsSavesLoadsAndSurvivesBadInput) {
 // 12.55) and here, as in the demo, the first scans arrive before the first odometry: the SLAM's local frame then
 // starts at the origin, and map->odom taken from it was off by the start pose (12.7 m).
 TEST(SlamComponent, MapToOdomTakesTheOdometryToThePoseAlsoWhenTheFirstScansHadNone) {
-  namespace sim = cairn::sim;
-  const sim::World office = sim::loadWorld(sim::resolveWorldPath("office"));
-  sim::SimConfig cfg;
-  cfg.seed = 7;
-  cfg.people = false;
-  cfg.crowd = false;
-  sim::Simulator s(office, cfg);
-  s.followRoute({{2, 12.55}, {12, 12.55}});
-  sim::SimOutput out;
-  s.advance(10.0, out);
+  const cairn::sim::SimOutput out = officeRun(7, 12.0, 10.0);
   ASSERT_GT(out.scans.size(), 60u);
   ASSERT_GT(std::hypot(out.odometry.front().pose.x, out.odometry.front().pose.y), 10.0);
 
@@ -306,13 +308,7 @@ TEST(SlamComponent, MapToOdomTakesTheOdometryToThePoseAlsoWhenTheFirstScansHadNo
   });
   robot.start();
   ASSERT_TRUE(wait_for([&] { return scan_pub->inter_process_subscription_count() > 0 && odom_pub->inter_process_subscription_count() > 0; }, 20s));
-  tf2_msgs::msg::TFMessage st;
-  geometry_msgs::msg::TransformStamped mount;
-  mount.header.frame_id = "base_link";
-  mount.child_frame_id = "laser";
-  mount.transform.rotation.w = 1.0;
-  st.transforms.push_back(mount);
-  tf_static->publish(st);
+  tf_static->publish(laserMount());
 
   std::size_t oi = 0;
   for (std::size_t i = 0; i < out.scans.size(); ++i) {
