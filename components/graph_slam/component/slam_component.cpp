@@ -222,8 +222,9 @@ class SlamNode : public cairn::Node {
   // The SLAM's local frame (GraphSlam::mapToLocal) is the odometry frame only if the first scan had odometry, and
   // only as far as scan matching has not corrected the odometry since. The simulator's first scans come before its
   // first odometry: the local frame then started at the origin while the odometry frame had the robot at its start
-  // pose, and consumers putting the map into the odometry frame (the people tracker's static map) were off by it. A scan without odometry repeats the last
-  // one; before any, and without odometry at all (use_odom false), the local frame stands for the odometry frame.
+  // pose, and consumers putting the map into the odometry frame (the people tracker's static map) were off by it.
+  // A scan without odometry repeats the last map -> odom; before any, and without odometry at all (use_odom
+  // false), the local frame stands for the odometry frame.
   void publishTf(const builtin_interfaces::msg::Time& stamp, const gs::Pose2& map_pose, const std::optional<gs::Pose2>& odom) {
     if (odom) map_to_odom_ = gs::compose(map_pose, gs::inverse(*odom));
     const gs::Pose2 m2o = map_to_odom_ ? *map_to_odom_ : slam_->mapToLocal();

@@ -140,7 +140,7 @@ class PeopleTracker : public cairn::Node {
     mp.min_age = declareRanged<double>("motion.min_age", mp.min_age, "s, earlier scans younger than this are not consulted");
     mp.margin = declareRanged<double>("motion.margin", mp.margin, "m, an earlier beam must end this far behind a point to see it free");
     mp.slope_factor = declareRanged<double>("motion.slope_factor", mp.slope_factor,
-                                            "times the beam's range step to a neighbour per beam of bearing offset, added to motion.margin");
+                                            "a grazing surface's range step per beam, extrapolated to the point's bearing (0 = off)");
     mp.min_free_scans = static_cast<std::size_t>(declareRanged<int64_t>("motion.min_free_scans", static_cast<int64_t>(mp.min_free_scans),
                                                                         "earlier scans that must see a point free"));
     // Free-space memory (FreeSpaceMemory): where the beams went through, in a grid around the robot.

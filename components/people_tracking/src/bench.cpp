@@ -92,7 +92,7 @@ struct RobotPath {
 };
 
 // Keyframes of one loop along `route` (closed back to its first point): turn in place at `turn_rate` towards each
-// segment, then drive it at `speed`; times from 0.
+// segment, then drive it at `speed`, and at the end turn back to the first heading; times from 0.
 std::vector<std::pair<double, Pose2>> routePoses(const std::vector<Eigen::Vector2d>& route, double speed,
                                                  double turn_rate) {
   std::vector<Eigen::Vector2d> pts = route;
@@ -113,6 +113,12 @@ std::vector<std::pair<double, Pose2>> routePoses(const std::vector<Eigen::Vector
     }
     t += d.norm() / speed;
     out.push_back({t, Pose2{pts[i].x(), pts[i].y(), theta}});
+  }
+  const double first = out.front().second.theta;
+  const double back = theta + std::remainder(first - theta, 2 * M_PI);
+  if (std::abs(back - theta) > 1e-9) {
+    t += std::abs(back - theta) / turn_rate;
+    out.push_back({t, Pose2{pts.back().x(), pts.back().y(), back}});
   }
   return out;
 }
