@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "cairn/people_tracking/bench.hpp"
+#include "corridor_scene.hpp"
 
 using namespace cairn::people_tracking;
 
@@ -325,15 +326,7 @@ TEST(Bench, RouteRobotPathDrivesTheCorridorAndItsWallsStartFewerTracks) {
   p.trajectories = dir + "/walker.csv";
   p.world = "corridor";
   p.trajectory_offset = Pose2{};
-  p.world_geometry = [](double, Scene& s) {
-    for (double side : {-1.0, 1.0}) {
-      for (double x = -2.0; x < 50.0; x += 6.0) {
-        s.addSegment({x, 1.05 * side}, {x + 5.0, 1.05 * side}, ObjectClass::kWall);
-        s.addSegment({x + 5.0, 1.05 * side}, {x + 5.0, 1.95 * side}, ObjectClass::kDoor);
-      }
-      s.addSegment({-2.0, 6.0 * side}, {50.0, 6.0 * side}, ObjectClass::kWall);
-    }
-  };
+  p.world_geometry = [](double, Scene& s) { test_scenes::addCorridorWithDoors(s, -2.0, 50.0); };
   p.robot_path = "route:corridor";
   p.robot_route = {{0.0, 0.0}, {30.0, 0.0}};
   p.robot_route_speed = 0.6;

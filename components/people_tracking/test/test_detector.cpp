@@ -6,6 +6,7 @@
 #include "cairn/people_tracking/detector.hpp"
 #include "cairn/people_tracking/motion_evidence.hpp"
 #include "cairn/people_tracking/scene.hpp"
+#include "corridor_scene.hpp"
 
 using namespace cairn::people_tracking;
 
@@ -722,13 +723,7 @@ TEST(MotionEvidence, AWallAfterADoorOpeningSeenAlongACorridorIsNotFree) {
   // in the margin they were seen free, formed moving clusters and started tracks riding along the wall
   // (docs/benchmarks.md "Corridor walls"). No wall return may be seen free; the premise (slope_factor 0) is checked.
   Scene scene;
-  for (double side : {-1.0, 1.0}) {
-    for (double x = -12.0; x < 30.0; x += 6.0) {
-      scene.addSegment({x, 1.05 * side}, {x + 5.0, 1.05 * side}, ObjectClass::kWall);
-      scene.addSegment({x + 5.0, 1.05 * side}, {x + 5.0, 1.95 * side}, ObjectClass::kDoor);
-    }
-    scene.addSegment({-12.0, 6.0 * side}, {30.0, 6.0 * side}, ObjectClass::kWall);  // rooms' back walls
-  }
+  test_scenes::addCorridorWithDoors(scene, -12.0, 30.0);
   LaserModel laser = fullCircleLaser();
   laser.beams = 720;
   laser.angle_increment = 2.0 * M_PI / 720.0;
