@@ -276,8 +276,9 @@ class GraphSlam {
   std::vector<StampedPose> trajectory() const;
   /// Occupancy grid from all nodes at their optimized poses (all trajectories).
   OccupancyGrid map() const;
-  /// Current pose of the robot base in the map frame (last scan), and map->odom (odom = local frame of the
-  /// current trajectory; with odometry given, local frame == odom frame).
+  /// Current pose of the robot base in the map frame (last scan), and map -> local frame of the current trajectory.
+  /// The local frame is the odometry frame only if the first scan came with odometry (and as far as scan matching
+  /// has not corrected it since); the component publishes map->odom as map pose x odometry pose^-1 instead.
   Pose2 currentPose() const;
   Pose2 mapToLocal() const;
 
