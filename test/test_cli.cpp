@@ -117,6 +117,8 @@ TEST(Cli, CommandsAgainstARunningContainer) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(count(r.output, "\n"), 1) << "one line: " << r.output;
   EXPECT_NE(r.output.find("no publisher of /no_such_topic"), std::string::npos);
+  r = run(kCairn + " topic echo /no_such_topic --full-length --wait 0.5");  // an option of echo's, not an error
+  EXPECT_NE(r.output.find("no publisher of /no_such_topic"), std::string::npos) << r.output;
   r = run(kCairn + " component list /no_such_container --wait 0.5");  // not found after discovery, not the 15 s reply timeout
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(count(r.output, "\n"), 1) << "one line: " << r.output;

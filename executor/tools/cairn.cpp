@@ -38,8 +38,9 @@ constexpr const char* kHelp = R"(usage: cairn <command> [args]
 
 Runtime (graph discovered through DDS built-in topics; non-cairn DDS participants are seen too):
   topic list                           topics and their types, one per line
-  topic echo <topic> [--once] [--count N]
-                                       print messages as YAML-like text
+  topic echo <topic> [--once] [--count N] [--full-length]
+                                       print messages as YAML-like text (lists of numbers or strings
+                                       are cut after 256 elements; --full-length prints them whole)
   topic hz <topic> [--duration S]      message rate (printed every second)
   topic info <topic>                   type, publishers and subscriptions with node and QoS
                                        (topic verbs also take --wait S; each refuses the others' options)
@@ -205,6 +206,7 @@ int topic_echo(const Args& a) {
   const std::string topic = norm_topic(a.pos[0]);
   const long count = a.has("--once") ? 1 : static_cast<long>(a.num("--count", 0, 1, 1e12, true));  // 0: until Ctrl-C
   const auto wait = wait_of(a, 5.0);  // time to find a publisher; a bad --wait is an error before anything starts
+  const bool full = a.has("--full-length");  // every element of long lists (ROS 2's echo --full-length)
   Cli cli;
   cairn::QoS qos;
   const auto& ts = type_of_topic(cli, topic, wait, &qos);
@@ -220,7 +222,7 @@ int topic_echo(const Args& a) {
   while (!cairn::Executor::signal_received() && (count == 0 || printed < count)) {
     cairn::MessageInfo info;
     if (reader->take(msg.get(), info)) {
-      std::cout << cairn::msgs::to_text(ts, msg.get()) << "---" << std::endl;
+      std::cout << cairn::msgs::to_text(ts, msg.get(), full ? 0 : cairn::msgs::kPrintMaxElements) << "---" << std::endl;
       ++printed;
       continue;
     }
@@ -550,7 +552,7 @@ int main(int argc, char** argv) {
         return parse_args(argc, argv, 3, with_value, flags);
       };
       if (sub == "list") return topic_list(args({"--wait"}, {}));
-      if (sub == "echo") return topic_echo(args({"--count", "--wait"}, {"--once"}));
+      if (sub == "echo") return topic_echo(args({"--count", "--wait"}, {"--once", "--full-length"}));
       if (sub == "hz") return topic_hz(args({"--duration", "--wait"}, {}));
       if (sub == "info") return topic_info(args({"--wait"}, {}));
       throw UsageError("unknown topic command '" + sub + "'");

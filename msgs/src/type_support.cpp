@@ -48,7 +48,21 @@ std::vector<const TypeSupport*> all_type_supports() {
   return out;
 }
 
-std::string to_text(const TypeSupport& ts, const void* msg) {
+namespace {
+// The generated print functions take no options; to_text sets the list limit for its own call on this thread.
+thread_local std::size_t t_print_max_elements = kPrintMaxElements;
+}  // namespace
+
+namespace gen {
+std::size_t print_max_elements() { return t_print_max_elements; }
+}  // namespace gen
+
+std::string to_text(const TypeSupport& ts, const void* msg, std::size_t max_elements) {
+  struct Restore {
+    std::size_t previous;
+    ~Restore() { t_print_max_elements = previous; }
+  } restore{t_print_max_elements};
+  t_print_max_elements = max_elements;
   std::ostringstream o;
   ts.print(msg, o);
   return o.str();

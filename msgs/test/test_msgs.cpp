@@ -83,6 +83,18 @@ TEST(Msgs, NestedSequencesRoundTripThroughCdr) {
   EXPECT_NE(text.find("child_frame_id: \"base_link2\""), std::string::npos) << text;
 }
 
+TEST(Msgs, LongListsPrintShortenedUnlessAskedForInFull) {
+  sensor_msgs::msg::LaserScan scan;
+  for (int i = 0; i < 300; ++i) scan.ranges.push_back(static_cast<float>(i) + 0.5F);
+  const std::string text = cairn::msgs::to_text(scan);  // cairn topic echo
+  EXPECT_NE(text.find("255.5, ... (300 in all)]"), std::string::npos) << text;
+  EXPECT_EQ(text.find("256.5"), std::string::npos);
+  const std::string full = cairn::msgs::to_text(scan, 0);  // cairn topic echo --full-length
+  EXPECT_NE(full.find("298.5, 299.5]"), std::string::npos) << full;
+  EXPECT_EQ(full.find("in all"), std::string::npos);
+  EXPECT_EQ(cairn::msgs::to_text(scan), text);  // the limit is the call's, not left behind
+}
+
 TEST(Msgs, OdometryPrintsReadableText) {
   nav_msgs::msg::Odometry o;
   o.header.frame_id = "odom";

@@ -69,7 +69,10 @@ namespace gen {
 struct Adl {};
 }  // namespace gen
 
-std::string to_text(const TypeSupport& ts, const void* msg);
+/// Readable YAML-like text (`cairn topic echo`). A list of numbers or strings longer than `max_elements` ends with
+/// "... (N in all)" after that many; 0 prints every element (`cairn topic echo --full-length`).
+inline constexpr std::size_t kPrintMaxElements = 256;
+std::string to_text(const TypeSupport& ts, const void* msg, std::size_t max_elements = kPrintMaxElements);
 
 /// The serialized sample as it goes on the wire: encapsulation header (CDR_LE) + XCDR1 payload, padded to a
 /// multiple of 4 with the padding count in the header's options (as Cyclone's own serializer does).
@@ -78,8 +81,8 @@ std::vector<unsigned char> serialize(const TypeSupport& ts, const void* msg);
 void deserialize(const TypeSupport& ts, const unsigned char* data, std::size_t size, void* msg);
 
 template <class T>
-std::string to_text(const T& msg) {
-  return to_text(type_support<T>(), &msg);
+std::string to_text(const T& msg, std::size_t max_elements = kPrintMaxElements) {
+  return to_text(type_support<T>(), &msg, max_elements);
 }
 
 }  // namespace cairn::msgs

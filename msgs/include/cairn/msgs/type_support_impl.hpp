@@ -125,7 +125,8 @@ void print_value(std::ostream& o, const T& v) {
   }
 }
 
-inline constexpr std::size_t kPrintMaxElements = 256;
+// Elements of a list of numbers or strings printed before "... (N in all)"; 0 = all (to_text's max_elements).
+std::size_t print_max_elements();
 
 template <class Range>
 void print_list(std::ostream& o, int indent, const char* name, const Range& r) {
@@ -135,8 +136,9 @@ void print_list(std::ostream& o, int indent, const char* name, const Range& r) {
   if constexpr (is_prim_v<T> || std::is_same_v<T, std::string>) {
     o << " [";
     std::size_t i = 0;
+    const std::size_t limit = print_max_elements();
     for (const auto& v : r) {
-      if (i == kPrintMaxElements) {
+      if (limit != 0 && i == limit) {
         o << ", ... (" << std::size(r) << " in all)";
         break;
       }
