@@ -4,7 +4,10 @@
 Scripted `cairn topic echo` recordings (the text format the CLI prints) of three scans: the odometry frame is the
 map frame moved by (1, -2) and turned by 0.5 rad, so tracks (odometry frame) must be put into the map frame with
 the true and odometry poses of their stamp. Person 7 is tracked in scans 1 and 2 and missed in scan 3, person 8
-stands 9 m from the robot (not counted), and one track in every scan is 1 m from everybody (a phantom).
+stands 9 m from the robot (not counted), and one track in every scan is 1 m from everybody (a phantom). The scans
+(laser 0.2 m ahead of and 0.1 m beside base_link, turned by 0.3 rad; base_link 0.5 m off the base, so the whole
+/tf_static chain counts) see person 7 in scans 1 and 2 and end 0.5 m from the laser in scan 3: the miss there is of
+a hidden person.
 """
 import math
 import os
@@ -15,6 +18,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import live_people_check  # noqa: E402
 
 ODOM_IN_MAP = (1.0, -2.0, 0.5)  # pose of the odometry frame in the map frame
+BASE_LINK, LASER = (-0.4, 0.3, 0.0), (0.2, 0.1, 0.3)  # base_footprint <- base_link <- laser (0.5 m apart: a test)
 
 
 def header(t, frame):
@@ -27,6 +31,34 @@ def odometry(t, frame, x, y, yaw):
     return (header(t, frame) + "child_frame_id: \"base_link\"\npose:\n  pose:\n    position:\n      x: %r\n      y: %r\n"
             "      z: 0\n    orientation:\n      x: 0\n      y: 0\n      z: %r\n      w: %r\n  covariance: [0, 0]\n"
             % (x, y, math.sin(yaw / 2), math.cos(yaw / 2)))
+
+
+def transform(parent, child, p):
+    return ("-\n  header:\n    stamp:\n      sec: 0\n      nanosec: 0\n    frame_id: \"%s\"\n  child_frame_id: \"%s\"\n"
+            "  transform:\n    translation:\n      x: %r\n      y: %r\n      z: 0.1\n    rotation:\n      x: 0\n"
+            "      y: 0\n      z: %r\n      w: %r\n" % (parent, child, p[0], p[1], math.sin(p[2] / 2), math.cos(p[2] / 2)))
+
+
+def laser_scan(t, laser, person, hidden):
+    """360 beams over the full turn from the laser pose `laser` (map frame): on a 0.1 m circle around `person`,
+    else no return (.inf, as the echo prints it); all 0.5 m when `hidden`."""
+    beams, ranges = 360, []
+    for k in range(beams):
+        a = laser[2] - math.pi + k * 2 * math.pi / beams
+        c, s = math.cos(a), math.sin(a)
+        dx, dy = person[0] - laser[0], person[1] - laser[1]
+        along = c * dx + s * dy
+        off2 = dx * dx + dy * dy - along * along
+        r = along - math.sqrt(0.01 - off2) if along > 0 and off2 < 0.01 else math.inf
+        ranges.append(0.5 if hidden else r)
+    return (header(t, "laser") + "angle_min: %r\nangle_max: %r\nangle_increment: %r\nrange_min: 0.05\n"
+            "range_max: 20\nranges: [%s]\nintensities: []\n" % (-math.pi, math.pi - 2 * math.pi / beams,
+                                                                 2 * math.pi / beams, ", ".join("%r" % r if r < math.inf else ".inf" for r in ranges)))
+
+
+def compose(a, b):
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2])
 
 
 def to_odom(p):
@@ -70,6 +102,20 @@ def main():
               "person_scans_missed": 1, "missed_by_person": {"7": [1, 3]}, "tracks_per_scan_median": 2}
     for key, value in expect.items():
         assert r[key] == value, (key, r[key], value, r)
+    assert "person_scans_visible" not in r, r  # no /scan recorded: no visibility fields
+    with open(os.path.join(d, "tf_static.txt"), "w") as f:
+        f.write(header(0.0, "") + "transforms:\n" + transform("base_link", "laser", LASER) +
+                transform("base_footprint", "base_link", BASE_LINK) + "---\n")
+    with open(os.path.join(d, "scan.txt"), "w") as f:
+        for k, (t, rb, p) in enumerate(zip(stamps, robot_map, person7)):
+            f.write(laser_scan(t, compose(compose(rb, BASE_LINK), LASER), p, hidden=k == 2) + "---\n")
+    r = live_people_check.score(d)
+    expect.update({"person_scans_visible": 2, "person_scans_visible_missed": 0, "missed_visible_by_person": {"7": [0, 2]}})
+    for key, value in expect.items():
+        assert r[key] == value, (key, r[key], value, r)
+    # The laser's pose needs the whole chain: without base_link's offset the beams miss person 7 in scan 1.
+    assert live_people_check.beams_near(live_people_check.load(os.path.join(d, "scan.txt"))[0],
+                                        compose(robot_map[0], LASER), *person7[0]) < 3
     # The parser reads the echo format's nested lists, inline lists and an empty list.
     parsed = live_people_check.load(os.path.join(d, "people_tracks.txt"))
     assert len(parsed) == 3 and parsed[0]["tracks"][1]["track_id"] == 2.0, parsed[0]

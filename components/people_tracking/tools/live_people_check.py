@@ -4,12 +4,17 @@
   live_people_check.py SPEC SECONDS [--cairn PATH] [--out DIR]
 
 Launches SPEC (a launch spec with cairn_sim::Simulator and cairn_people_tracking::PeopleTracker) for SECONDS of
-wall time, records /people/tracks, /people/ground_truth, /odom and /ground_truth with `cairn topic echo` (as any DDS
-tool could), and prints one JSON line: scans, tracks per scan (mean, median, max), phantom track-scans (a published
-track with no simulated person within 0.5 m; tracks are in the odometry frame and are put into the simulator's map
-frame with the true and odometry poses of the same stamp), and per simulated person within 8 m of the robot the
-scans in which no track was within 0.5 m (visibility is not checked: a person behind a wall counts as missed).
-Used for docs/benchmarks.md "Corridor walls" (the demo's simulator container).
+wall time, records /people/tracks, /people/ground_truth, /odom, /ground_truth, /scan and /tf_static with `cairn topic
+echo` (as any DDS tool could), and prints one JSON line: scans, tracks per scan (mean, median, max), phantom
+track-scans (a published track with no simulated person within 0.5 m; tracks are in the odometry frame and are put
+into the simulator's map frame with the true and odometry poses of the same stamp), and per simulated person within
+8 m of the robot the scans in which no track was within 0.5 m — all of them (person_scans_within_8m,
+person_scans_missed, missed_by_person: a person behind a wall counts as missed) and those in which the person was in
+the laser's line of sight (person_scans_visible, person_scans_visible_missed, missed_visible_by_person: at least 3
+beams of the scan of that stamp end within 0.35 m of the person, as the people bench counts people; the laser's
+pose is the true pose composed with the /tf_static chain up to the scan's frame). The visibility fields are left
+out of recordings without /scan and /tf_static.
+Used for docs/benchmarks.md "Corridor walls" and "The demo's SLAM range and weak legs" (the demo's simulator container).
 """
 import argparse
 import bisect
@@ -22,7 +27,11 @@ import sys
 import tempfile
 import time
 
-TOPICS = ["/people/tracks", "/people/ground_truth", "/odom", "/ground_truth"]
+TOPICS = ["/people/tracks", "/people/ground_truth", "/odom", "/ground_truth", "/scan", "/tf_static"]
+VISIBLE_RADIUS, VISIBLE_BEAMS = 0.35, 3  # a person is in sight when this many beams end this close to them
+
+
+YAML_SPECIAL = {".inf": math.inf, "-.inf": -math.inf, ".nan": math.nan}  # how the echo prints non-finite numbers
 
 
 def scalar(text):
@@ -31,6 +40,8 @@ def scalar(text):
         return [scalar(x) for x in text[1:-1].split(",") if x.strip()]
     if text.startswith('"') and text.endswith('"'):
         return text[1:-1]
+    if text in YAML_SPECIAL:
+        return YAML_SPECIAL[text]
     try:
         return float(text)
     except ValueError:
@@ -98,13 +109,67 @@ def inverse(a):
     return (-(c * a[0] + s * a[1]), -(-s * a[0] + c * a[1]), -a[2])
 
 
+def yaw_of(q):
+    return math.atan2(2 * q["w"] * q["z"], 1 - 2 * q["z"] ** 2)
+
+
+def mount(tf_static, frame):
+    """Planar pose of `frame` in the root of its /tf_static chain (the robot's base, whose pose /ground_truth gives)."""
+    links = {}
+    for m in tf_static:
+        for tr in m.get("transforms") or []:
+            t = tr["transform"]
+            links[tr["child_frame_id"]] = (tr["header"]["frame_id"],
+                                           (t["translation"]["x"], t["translation"]["y"], yaw_of(t["rotation"])))
+    p, seen = (0.0, 0.0, 0.0), set()
+    while frame in links and frame not in seen:
+        seen.add(frame)
+        frame, up = links[frame]
+        p = compose(up, p)
+    return p
+
+
+def beams_near(scan, laser, x, y):
+    """How many beams of `scan` (laser at `laser` in the map frame) end within VISIBLE_RADIUS of (x, y)."""
+    dx, dy = x - laser[0], y - laser[1]
+    dist = math.hypot(dx, dy)
+    if dist <= VISIBLE_RADIUS:
+        return VISIBLE_BEAMS
+    inc, ranges = scan["angle_increment"], scan["ranges"]
+    if not inc > 0 or not isinstance(ranges, list):
+        return 0
+    bearing = math.atan2(dy, dx) - laser[2] - scan["angle_min"]
+    half = math.asin(VISIBLE_RADIUS / dist)
+    n = 0
+    for k in range(math.floor((bearing - half) / inc), math.ceil((bearing + half) / inc) + 1):
+        i = k % len(ranges) if abs(len(ranges) * inc - 2 * math.pi) < 2 * inc else k
+        if not 0 <= i < len(ranges) or not isinstance(ranges[i], float) or not math.isfinite(ranges[i]):
+            continue
+        a = laser[2] + scan["angle_min"] + k * inc
+        ex, ey = laser[0] + ranges[i] * math.cos(a), laser[1] + ranges[i] * math.sin(a)
+        n += math.hypot(ex - x, ey - y) <= VISIBLE_RADIUS
+    return n
+
+
 def score(d, match=0.5, field=8.0):
     odom = {stamp(m): pose(m) for m in load(os.path.join(d, "odom.txt"))}
     truth = {stamp(m): pose(m) for m in load(os.path.join(d, "ground_truth.txt"))}
     people = {round(stamp(m), 2): [(int(p["id"]), p["position"]["x"], p["position"]["y"]) for p in (m["people"] or [])]
               for m in load(os.path.join(d, "people_ground_truth.txt"))}
     keys = sorted(people)
+    scans, laser_mount = None, None
+    if os.path.exists(os.path.join(d, "scan.txt")) and os.path.exists(os.path.join(d, "tf_static.txt")):
+        scans = {stamp(m): m for m in load(os.path.join(d, "scan.txt"))}
+        for m in scans.values():
+            if not isinstance(m.get("ranges"), list) or any(not isinstance(r, float) for r in m["ranges"]):
+                raise SystemExit("live_people_check: %s/scan.txt: the scan at %.3f s has ranges that are not numbers "
+                                 "(recorded without `cairn topic echo --full-length`?)" % (d, stamp(m)))
+        frames = {m["header"]["frame_id"] for m in scans.values()}
+        if len(frames) > 1:
+            raise SystemExit("live_people_check: scans in several frames %s in %s/scan.txt" % (sorted(frames), d))
+        laser_mount = mount(load(os.path.join(d, "tf_static.txt")), frames.pop() if frames else "")
     per_scan, phantoms, missed, seen = [], 0, collections.Counter(), collections.Counter()
+    vis_missed, vis_seen = collections.Counter(), collections.Counter()
     for m in load(os.path.join(d, "people_tracks.txt")):
         t = stamp(m)
         i = bisect.bisect_left(keys, t - 0.001)
@@ -116,18 +181,27 @@ def score(d, match=0.5, field=8.0):
         per_scan.append(len(tracks))
         phantoms += sum(1 for x, y, _ in tracks if all(math.hypot(x - px, y - py) > match for _, px, py in persons))
         robot = truth[t]
+        scan = scans.get(t) if scans is not None else None
         for pid, px, py in persons:
             if math.hypot(px - robot[0], py - robot[1]) <= field:
+                miss = all(math.hypot(x - px, y - py) > match for x, y, _ in tracks)
                 seen[pid] += 1
-                missed[pid] += all(math.hypot(x - px, y - py) > match for x, y, _ in tracks)
+                missed[pid] += miss
+                if scan is not None and beams_near(scan, compose(robot, laser_mount), px, py) >= VISIBLE_BEAMS:
+                    vis_seen[pid] += 1
+                    vis_missed[pid] += miss
     if not per_scan:
         raise SystemExit("live_people_check: no scans with tracks, odometry and ground truth at the same stamp in " + d)
     ordered = sorted(per_scan)
+    visible = {}
+    if scans is not None:
+        visible = {"person_scans_visible": sum(vis_seen.values()), "person_scans_visible_missed": sum(vis_missed.values()),
+                   "missed_visible_by_person": {str(k): [vis_missed[k], vis_seen[k]] for k in sorted(vis_seen)}}
     return {"scans": len(per_scan), "tracks_per_scan_mean": round(sum(per_scan) / len(per_scan), 3),
             "tracks_per_scan_median": ordered[len(ordered) // 2], "tracks_per_scan_max": ordered[-1],
             "track_scans": sum(per_scan), "phantom_track_scans": phantoms,
             "person_scans_within_8m": sum(seen.values()), "person_scans_missed": sum(missed.values()),
-            "missed_by_person": {str(k): [missed[k], seen[k]] for k in sorted(seen)}}
+            "missed_by_person": {str(k): [missed[k], seen[k]] for k in sorted(seen)}, **visible}
 
 
 def main():
@@ -147,7 +221,7 @@ def main():
         echoes = []
         for topic in TOPICS:
             f = open(os.path.join(out, topic.strip("/").replace("/", "_") + ".txt"), "w")
-            echoes.append((subprocess.Popen([a.cairn, "topic", "echo", topic, "--wait", "10"], stdout=f,
+            echoes.append((subprocess.Popen([a.cairn, "topic", "echo", topic, "--wait", "10", "--full-length"], stdout=f,
                                             stderr=subprocess.DEVNULL), f))
         rc = launch.wait()
         for p, f in echoes:
