@@ -115,36 +115,13 @@ class SlamNode : public cairn::Node {
   }
 
  private:
-  struct OdomSample {
-    double stamp;
-    gs::Pose2 pose;
-  };
-
   void onOdom(const nav_msgs::msg::Odometry& m) {
     const double t = to_seconds(m.header.stamp);
     const gs::Pose2 p{{m.pose.pose.position.x, m.pose.pose.position.y}, yaw_of(m.pose.pose.orientation)};
     if (!std::isfinite(t) || !p.t.allFinite() || !std::isfinite(p.theta)) return;
     if (!odom_.empty() && t < odom_.back().stamp) odom_.clear();  // time jumped back (log restarted)
-    odom_.push_back({t, p});
+    odom_.push_back(gs::StampedPose2{t, p});
     while (odom_.size() > 400) odom_.pop_front();
-  }
-
-  std::optional<gs::Pose2> odomAt(double t) const {
-    if (odom_.empty()) return std::nullopt;
-    auto it = std::lower_bound(odom_.begin(), odom_.end(), t, [](const OdomSample& s, double x) { return s.stamp < x; });
-    if (it == odom_.end()) {
-      if (t - odom_.back().stamp > odom_tolerance_) return std::nullopt;
-      return odom_.back().pose;
-    }
-    if (it == odom_.begin()) {
-      if (it->stamp - t > odom_tolerance_) return std::nullopt;
-      return it->pose;
-    }
-    const OdomSample& a = *(it - 1);
-    const OdomSample& b = *it;
-    const double s = (t - a.stamp) / std::max(1e-9, b.stamp - a.stamp);
-    const gs::Pose2 d = gs::compose(gs::inverse(a.pose), b.pose);
-    return gs::compose(a.pose, gs::Pose2{s * d.t, s * d.theta});
   }
 
   // Laser mount from TF (base_frame <- scan frame); after tf_timeout seconds of scans without it, the
@@ -173,7 +150,7 @@ class SlamNode : public cairn::Node {
     if (!resolveMount(m, stamp)) return;
     std::optional<gs::Pose2> odom;
     if (use_odom_) {
-      odom = odomAt(stamp);
+      odom = gs::poseAt(odom_, stamp, odom_tolerance_);
       if (!odom) warnOnce("no odometry within " + std::to_string(odom_tolerance_) + " s of the scan; predicting");
     }
     const std::optional<gs::ScanUpdate> u = slam_->addScan(toCore(m), odom);
@@ -332,7 +309,7 @@ class SlamNode : public cairn::Node {
   std::string base_frame_, odom_frame_, map_frame_;
   bool use_odom_ = true;
   double odom_tolerance_ = 0.2, tf_timeout_ = 2.0, map_period_ = 5.0;
-  std::deque<OdomSample> odom_;
+  std::deque<gs::StampedPose2> odom_;
   bool mount_known_ = false;
   std::optional<double> first_scan_stamp_;
   std::optional<gs::Pose2> map_to_odom_;  ///< from the last scan with odometry (publishTf)

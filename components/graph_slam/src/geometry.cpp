@@ -1,5 +1,6 @@
 #include "cairn/graph_slam/geometry.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -31,6 +32,35 @@ Pose2 compose(const Pose2& a, const Pose2& b) {
 
 Pose2 inverse(const Pose2& a) {
   return Pose2{-(rotation2(a.theta).transpose() * a.t), normalizeAngle(-a.theta)};
+}
+
+namespace {
+// a * (s * (a^-1 * b)): b's motion from a, scaled by s (s in [0, 1] interpolates, s > 1 continues it).
+Pose2 scaledMotion(const Pose2& a, const Pose2& b, double s) {
+  const Pose2 d = compose(inverse(a), b);
+  return compose(a, Pose2{s * d.t, normalizeAngle(s * d.theta)});
+}
+}  // namespace
+
+std::optional<Pose2> poseAt(const std::deque<StampedPose2>& samples, double t, double tolerance) {
+  if (samples.empty() || !std::isfinite(t)) return std::nullopt;
+  const auto it = std::lower_bound(samples.begin(), samples.end(), t,
+                                   [](const StampedPose2& s, double x) { return s.stamp < x; });
+  if (it == samples.end()) {
+    const StampedPose2& last = samples.back();
+    if (t - last.stamp > tolerance) return std::nullopt;
+    constexpr double kMinBase = 0.05, kMaxBase = 1.0;  // s: the motion continued is that over this span
+    for (auto b = samples.rbegin() + 1; b != samples.rend() && last.stamp - b->stamp <= kMaxBase; ++b)
+      if (last.stamp - b->stamp >= kMinBase)
+        return scaledMotion(b->pose, last.pose, (t - b->stamp) / (last.stamp - b->stamp));
+    return last.pose;
+  }
+  if (it == samples.begin()) {
+    if (it->stamp - t > tolerance) return std::nullopt;
+    return it->pose;
+  }
+  const StampedPose2& a = *(it - 1);
+  return scaledMotion(a.pose, it->pose, (t - a.stamp) / std::max(1e-9, it->stamp - a.stamp));
 }
 
 Pose3 compose(const Pose3& a, const Pose3& b) {

@@ -69,6 +69,42 @@ TEST(Geometry, ExpLogRoundTripAndComposeInverse) {
   }
 }
 
+TEST(Geometry, PoseAtInterpolatesAndContinuesTheLastMotionWithinTheTolerance) {
+  // Odometry of a robot driving straight at 0.5 m/s with heading 0.3 rad, sampled every 0.1 s.
+  const double heading = 0.3, speed = 0.5;
+  auto at = [&](double t) { return gs::Pose2{speed * t * Eigen::Vector2d(std::cos(heading), std::sin(heading)), heading}; };
+  std::deque<gs::StampedPose2> odom;
+  for (int k = 0; k <= 5; ++k) odom.push_back({0.1 * k, at(0.1 * k)});
+  auto expectAt = [&](double t, const gs::Pose2& want) {
+    const auto p = gs::poseAt(odom, t, 0.2);
+    ASSERT_TRUE(p.has_value()) << t;
+    EXPECT_LT((p->t - want.t).norm(), 1e-9) << t;
+    EXPECT_NEAR(gs::normalizeAngle(p->theta - want.theta), 0.0, 1e-9) << t;
+  };
+  expectAt(0.25, at(0.25));  // between samples
+  // A scan 0.1 s newer than the last odometry (it came first): the motion continues; holding the last sample
+  // would put the robot 5 cm back.
+  expectAt(0.6, at(0.6));
+  expectAt(0.7, at(0.7));
+  EXPECT_FALSE(gs::poseAt(odom, 0.75, 0.2).has_value());  // beyond the tolerance
+  expectAt(-0.1, at(0.0));                                 // before the first: the first
+  EXPECT_FALSE(gs::poseAt(odom, -0.3, 0.2).has_value());
+  // Samples 10 ms apart at the end: the motion continued is that over >= 50 ms, not the last sample's noise.
+  std::deque<gs::StampedPose2> jitter = odom;
+  jitter.push_back({0.51, gs::Pose2{at(0.51).t + Eigen::Vector2d(0.0, 0.003), heading}});
+  const auto j = gs::poseAt(jitter, 0.6, 0.2);
+  ASSERT_TRUE(j.has_value());
+  EXPECT_LT((j->t - at(0.6).t).norm(), 0.01);
+  // Turning in place at 1 rad/s: the heading continues across +-pi.
+  std::deque<gs::StampedPose2> turn{{0.0, gs::Pose2{Eigen::Vector2d::Zero(), 2.9}}, {0.1, gs::Pose2{Eigen::Vector2d::Zero(), 3.0}}};
+  const auto r = gs::poseAt(turn, 0.3, 0.2);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_NEAR(gs::normalizeAngle(r->theta - 3.2), 0.0, 1e-9);
+  // One sample: held; none: nothing.
+  EXPECT_LT((gs::poseAt(std::deque<gs::StampedPose2>{{1.0, at(1.0)}}, 1.1, 0.2)->t - at(1.0).t).norm(), 1e-12);
+  EXPECT_FALSE(gs::poseAt({}, 0.0, 0.2).has_value());
+}
+
 TEST(Geometry, RetractIsRightPerturbationForSE3AndAdditiveForSE2) {
   std::mt19937 rng(3);
   const gs::Pose3 x = randomPose3(rng);

@@ -3,6 +3,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <deque>
+#include <optional>
 
 namespace cairn::graph_slam {
 
@@ -30,6 +32,18 @@ Pose2 compose(const Pose2& a, const Pose2& b);  ///< a * b
 Pose2 inverse(const Pose2& a);
 Pose3 compose(const Pose3& a, const Pose3& b);  ///< a * b
 Pose3 inverse(const Pose3& a);
+
+/// A timestamped planar pose (an odometry sample).
+struct StampedPose2 {
+  double stamp = 0.0;  // s
+  Pose2 pose;
+};
+/// The pose at time t from samples sorted by stamp: between two samples, their relative motion scaled linearly in
+/// time; up to `tolerance` s after the last sample, that motion continued from the last sample (the relative motion
+/// over the last >= 0.05 s, from a sample at most 1 s older; held when there is none) — a scan that arrives before
+/// the odometry of its stamp then gets the robot's pose at its stamp, not the one a period earlier; up to
+/// `tolerance` s before the first sample, the first sample. std::nullopt when t is farther from the samples.
+std::optional<Pose2> poseAt(const std::deque<StampedPose2>& samples, double t, double tolerance);
 
 /// SO(3) exponential map of a rotation vector (axis * angle).
 Eigen::Quaterniond expSO3(const Eigen::Vector3d& w);
