@@ -93,10 +93,14 @@ def stamp(m):
     return round(int(h["sec"]) + int(h["nanosec"]) * 1e-9, 3)
 
 
+def yaw_of(q):
+    """Heading of a quaternion that turns about z only."""
+    return math.atan2(2 * q["w"] * q["z"], 1 - 2 * q["z"] ** 2)
+
+
 def pose(m):
     p = m["pose"]["pose"]
-    q = p["orientation"]
-    return (p["position"]["x"], p["position"]["y"], math.atan2(2 * q["w"] * q["z"], 1 - 2 * q["z"] ** 2))
+    return (p["position"]["x"], p["position"]["y"], yaw_of(p["orientation"]))
 
 
 def compose(a, b):
@@ -107,10 +111,6 @@ def compose(a, b):
 def inverse(a):
     c, s = math.cos(a[2]), math.sin(a[2])
     return (-(c * a[0] + s * a[1]), -(-s * a[0] + c * a[1]), -a[2])
-
-
-def yaw_of(q):
-    return math.atan2(2 * q["w"] * q["z"], 1 - 2 * q["z"] ** 2)
 
 
 def mount(tf_static, frame):
