@@ -315,8 +315,9 @@ TEST(SlamComponent, MapToOdomTakesTheOdometryToThePoseAlsoWhenTheFirstScansHadNo
     const auto& scan = out.scans[i];
     // The first five scans go out before any odometry (the component predicts them); then the odometry up to three
     // scans ahead, so that it has arrived when its scan does: two topics are not delivered in order, and a scan newer
-    // than the last odometry continues the last odometry motion (graph_slam::poseAt), exact only on straight runs
-    // (with one scan of lead, before poseAt extrapolated, CI once compared odometry one period stale: 5.9 cm).
+    // than the last odometry continues the last odometry motion (graph_slam::poseAt), exact only where the odometry
+    // moves the same in consecutive periods (with one scan of lead, before poseAt extrapolated, a clean-clone CI run
+    // once compared odometry one period stale: 5.9 cm).
     const double until = out.scans[std::min(i + 3, out.scans.size() - 1)].stamp;
     while (i >= 5 && oi < out.odometry.size() && out.odometry[oi].stamp <= until + 1e-9) odom_pub->publish(toMsg(out.odometry[oi++]));
     if (i == 5) std::this_thread::sleep_for(100ms);  // the odometry is in before the scan that needs it
@@ -333,9 +334,9 @@ TEST(SlamComponent, MapToOdomTakesTheOdometryToThePoseAlsoWhenTheFirstScansHadNo
 
   // Every scan after the odometry started: map->odom (x) odometry at its stamp == its /slam/pose. A scan that arrives
   // before its odometry continues the last odometry motion: the test's lead makes that rare, but a loaded machine
-  // still delays a callback now and then (twice in 28 scans with three busy loops on two cores), and in a turn the
-  // continued motion is not exact, so such scans may be off by up to a period's motion (< 0.1 m here); the rest
-  // must be exact.
+  // still delays a callback now and then (twice in 28 scans with three busy loops on two cores, before poseAt), and
+  // where the robot speeds up or the odometry's noise changes its step the continued motion is not exact, so such
+  // scans may be off by up to a period's motion (< 0.1 m here); the rest must be exact.
   std::size_t checked = 0, exact = 0;
   std::lock_guard l(mu);
   for (const auto& [stamp, p] : slam_pose) {
